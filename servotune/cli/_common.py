@@ -1,0 +1,46 @@
+"""Helpers shared by the subcommands: output options and printing."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["add_output_options", "print_json", "to_jsonable"]
+
+
+def add_output_options(parser, default_out: str | None = "out") -> None:
+    """``--json``, ``--out DIR`` and ``--force`` as every subcommand spells them."""
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object of the results (SI values)")
+    if default_out is not None:
+        parser.add_argument("--out", type=Path, default=Path(default_out),
+                            help=f"folder for figures and results (default: {default_out})")
+        parser.add_argument("--force", action="store_true",
+                            help="overwrite existing output files")
+
+
+def to_jsonable(obj):
+    """Numpy scalars and arrays to plain Python; non-finite floats refused."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return to_jsonable(obj.item())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        raise ValueError(f"refusing to print a non-finite result ({obj})")
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def print_json(obj) -> None:
+    """Print one JSON object on standard output."""
+    json.dump(to_jsonable(obj), sys.stdout, indent=2)
+    sys.stdout.write("\n")

@@ -1,0 +1,60 @@
+"""``servotune twomass``: the paper's two-mass analysis (sec 4.1, Fig 4 and Fig 5)."""
+
+from __future__ import annotations
+
+import warnings
+
+from .. import plots, report, twomass
+from ._common import add_output_options, print_json
+
+HZ = 1.0 / (2.0 * 3.141592653589793)
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "twomass", help="fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
+        description="Fixed points, optimal guide-way damping Copt, optimal peak and limit "
+                    "resonances of the two-mass layouts of sec 4.1; writes Fig 4 and Fig 5. "
+                    "Defaults are the paper's Fig 5 system.")
+    p.add_argument("--m1", type=float, default=5000.0, help="slide mass M1 [kg] (5000)")
+    p.add_argument("--k", type=float, default=16e6, help="stiffness K [N/m] (16e6)")
+    p.add_argument("--alpha", type=float, default=0.3, help="mass ratio M2/M1 [-] (0.3)")
+    p.add_argument("--layout", choices=("A", "B"), default="B",
+                   help="B: ground-C-M1-K-M2 (paper Eq 1-7); A: ground-K-M2-C-M1 "
+                        "(an interpretation of the paper's unreadable figure)")
+    p.add_argument("--no-plots", action="store_true", help="do not write figures")
+    add_output_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    system = twomass.TwoMassSystem(m1=args.m1, k=args.k, alpha=args.alpha, layout=args.layout)
+    files = [] if args.no_plots else [args.out / f"fig5_compliance_layout_{system.layout}.png",
+                                      args.out / "fig4_g_alpha.png"]
+    report.check_writable(files, args.force)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        analysis = twomass.analyse_two_mass(system)
+    if files:
+        report.save_figure(plots.plot_two_mass_compliance(analysis), files[0], args.force)
+        report.save_figure(plots.plot_g_alpha(mark=system.alpha if system.layout == "B" else None),
+                           files[1], args.force)
+    result = analysis.to_dict()
+    result["warnings"] = [str(w.message) for w in caught]
+    result["figures"] = [str(f) for f in files]
+    if args.json:
+        print_json(result)
+        return 0
+    print(f"two-mass layout {system.layout}: M1 = {system.m1:g} kg, M2 = {system.m2:g} kg, "
+          f"K = {system.k:g} N/m, alpha = {system.alpha:g}")
+    print("  fixed points        : " + ", ".join(f"{f:.3f} Hz" for f in result["fixed_points_hz"]))
+    print(f"  Copt                : {analysis.c_opt:.4e} N s/m")
+    print(f"  optimal peak        : {analysis.peak_compliance:.4e} m/N "
+          f"at {result['peak_frequency_hz']:.3f} Hz")
+    print(f"  resonance C -> 0    : {result['resonance_c0_hz']:.3f} Hz")
+    print(f"  resonance C -> inf  : {result['resonance_cinf_hz']:.3f} Hz")
+    for message in result["warnings"]:
+        print(f"  warning: {message}")
+    for f in files:
+        print(f"  wrote {f}")
+    return 0

@@ -1,0 +1,5 @@
+"""Shared test set-up: a backend with no screen."""
+
+import matplotlib
+
+matplotlib.use("Agg")
