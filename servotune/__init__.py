@@ -5,6 +5,7 @@ Procedia CIRP 21 (2014) 367-372.
 Use as ``import servotune as st``. SI units throughout (m, N, s, kg, rad).
 """
 
+from .structure import ModalModel, UnknownDofError
 from .twomass import (
     TwoMassAnalysis,
     TwoMassSystem,
@@ -23,6 +24,9 @@ __version__ = "0.1.0"
 
 __all__ = [
     "__version__",
+    # structure
+    "ModalModel",
+    "UnknownDofError",
     # twomass
     "TwoMassSystem",
     "TwoMassAnalysis",
