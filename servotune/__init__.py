@@ -5,6 +5,27 @@ Procedia CIRP 21 (2014) 367-372.
 Use as ``import servotune as st``. SI units throughout (m, N, s, kg, rad).
 """
 
+from .drive import (
+    Drive,
+    LowPassFilter,
+    Motor,
+    NotchFilter,
+    PIController,
+    kv_from_m_per_min_per_mm,
+    kv_to_m_per_min_per_mm,
+)
+from .frequency import (
+    ClosedLoopPoles,
+    LoopAnalysis,
+    analyse_loop,
+    closed_loop_poles,
+    compliance,
+    fast_frequency_response,
+    following_error,
+    modal_receptance,
+    port_compliance,
+)
+from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
 from .structure import ModalModel, UnknownDofError
 from .twomass import (
     TwoMassAnalysis,
@@ -24,6 +45,29 @@ __version__ = "0.1.0"
 
 __all__ = [
     "__version__",
+    # drive
+    "Drive",
+    "LowPassFilter",
+    "Motor",
+    "NotchFilter",
+    "PIController",
+    "kv_from_m_per_min_per_mm",
+    "kv_to_m_per_min_per_mm",
+    # plant
+    "Contact",
+    "UnstableLoopError",
+    "build_plant",
+    "loop_transfer",
+    # frequency
+    "ClosedLoopPoles",
+    "LoopAnalysis",
+    "analyse_loop",
+    "closed_loop_poles",
+    "compliance",
+    "fast_frequency_response",
+    "following_error",
+    "modal_receptance",
+    "port_compliance",
     # structure
     "ModalModel",
     "UnknownDofError",
