@@ -5,6 +5,29 @@ Procedia CIRP 21 (2014) 367-372.
 Use as ``import servotune as st``. SI units throughout (m, N, s, kg, rad).
 """
 
+# friction
+from .friction import (
+    BIANCHI2014,
+    CANUDAS1995,
+    HysteresisCycle,
+    LuGreParameters,
+    LuGreResponse,
+    lugre_cycle,
+    lugre_derivative,
+    lugre_force,
+    lugre_jacobian,
+    presliding_linearisation,
+    simulate_lugre,
+    sliding_linearisation,
+    steady_state_friction,
+    stribeck_curve,
+)
+from .friction.equivalent import (
+    describing_function,
+    equivalent_damping_stiction,
+    stiction_describing_function,
+)
+from .friction.identify import FrictionFit, fit_presliding, fit_steady_state
 from .twomass import (
     TwoMassAnalysis,
     TwoMassSystem,
@@ -35,4 +58,25 @@ __all__ = [
     "optimal_peak",
     "peak_compliance",
     "two_mass_compliance",
+    # friction
+    "BIANCHI2014",
+    "CANUDAS1995",
+    "HysteresisCycle",
+    "LuGreParameters",
+    "LuGreResponse",
+    "lugre_cycle",
+    "lugre_derivative",
+    "lugre_force",
+    "lugre_jacobian",
+    "presliding_linearisation",
+    "simulate_lugre",
+    "sliding_linearisation",
+    "steady_state_friction",
+    "stribeck_curve",
+    "describing_function",
+    "equivalent_damping_stiction",
+    "stiction_describing_function",
+    "FrictionFit",
+    "fit_presliding",
+    "fit_steady_state",
 ]

@@ -2,6 +2,7 @@
 published examples of Canudas de Wit et al. (1995)."""
 
 import dataclasses
+import itertools
 import math
 
 import control
@@ -227,7 +228,7 @@ def periodic_reference(p, amplitude, omega):
 
     zs = p.fs / p.sigma0
     y = [0.0, 0.0]
-    for a, b in zip(knots[:-1], knots[1:], strict=True):
+    for a, b in itertools.pairwise(knots):
         y = solve_ivp(rhs1, (a, b), y, method="Radau", jac=jac1, rtol=1e-10,
                       atol=[1e-12 * zs, 1e-12]).y[:, -1]
     z0 = y[0] / -math.expm1(-y[1])
@@ -242,7 +243,7 @@ def periodic_reference(p, amplitude, omega):
         return [[-rate(t), 0, 0], [df * v(t), 0, 0], [df * math.sin(omega * t), 0, 0]]
 
     y = [z0, 0.0, 0.0]
-    for a, b in zip(knots[:-1], knots[1:], strict=True):
+    for a, b in itertools.pairwise(knots):
         y = solve_ivp(rhs2, (a, b), y, method="Radau", jac=jac2, rtol=1e-10,
                       atol=[1e-12 * zs, 1e-12 * p.fs * amplitude,
                             1e-12 * p.fs * period]).y[:, -1]
@@ -279,7 +280,7 @@ def test_canudas_stick_slip_benchmark():
         return [v, k * (vp * t - x) - f, lugre.lugre_derivative(p, z, v)]
 
     def jac(t, y):
-        x, v, z = y
+        _, v, z = y
         j = lugre.lugre_jacobian(p, z, v)
         return [[0, 1, 0], [-k, -float(j.dforce_dv), -float(j.dforce_dz)],
                 [0, float(j.dzdot_dv), float(j.dzdot_dz)]]

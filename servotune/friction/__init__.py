@@ -5,6 +5,20 @@ an imposed motion), ``equivalent`` the describing functions (the paper's stictio
 form and the LuGre element numerically), ``identify`` the fits to measurements.
 """
 
+from .equivalent import (
+    describing_function,
+    equivalent_damping_stiction,
+    stiction_describing_function,
+    stiction_peak_damping,
+)
+from .identify import (
+    FrictionData,
+    FrictionFit,
+    IdentificationError,
+    fit_presliding,
+    fit_steady_state,
+    read_friction_csv,
+)
 from .lugre import (
     BIANCHI2014,
     BIANCHI2014_SPREAD,
@@ -29,18 +43,28 @@ __all__ = [
     "BIANCHI2014",
     "BIANCHI2014_SPREAD",
     "CANUDAS1995",
+    "FrictionData",
+    "FrictionFit",
     "HysteresisCycle",
+    "IdentificationError",
     "LuGreJacobian",
     "LuGreParameters",
     "LuGreResponse",
+    "describing_function",
+    "equivalent_damping_stiction",
+    "fit_presliding",
+    "fit_steady_state",
     "lugre_cycle",
     "lugre_derivative",
     "lugre_force",
     "lugre_jacobian",
     "presliding_linearisation",
+    "read_friction_csv",
     "simulate_lugre",
     "sliding_linearisation",
     "steady_state_friction",
     "steady_state_slope",
+    "stiction_describing_function",
+    "stiction_peak_damping",
     "stribeck_curve",
 ]

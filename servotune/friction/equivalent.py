@@ -8,7 +8,8 @@ loop. The viscous damper that dissipates the same energy has (Bianchi et al. 201
 and, more generally, the first harmonic of the periodic force defines the describing function
 ``F ~ Keq x + Ceq dx/dt``::
 
-    Keq = (1 / (pi A)) int_0^2pi F sin(theta) dtheta,   Ceq = (1 / (pi A)) int_0^2pi F cos(theta) dtheta / w
+    Keq = (1 / (pi A)) int_0^2pi F sin(theta) dtheta
+    Ceq = (1 / (pi A w)) int_0^2pi F cos(theta) dtheta        (x = A sin(theta), theta = w t)
 
 Two describing functions are provided:
 
@@ -35,10 +36,10 @@ import numpy as np
 from .lugre import DEFAULT_CYCLE_STEPS, LuGreParameters, lugre_cycle
 
 __all__ = [
+    "describing_function",
     "equivalent_damping_stiction",
     "stiction_describing_function",
     "stiction_peak_damping",
-    "describing_function",
 ]
 
 
@@ -157,7 +158,7 @@ def stiction_peak_damping(fs, sigma0, omega) -> tuple[np.ndarray, np.ndarray]:
     --------
     >>> a, c = stiction_peak_damping(6013.0, 5.9e9, 2 * math.pi * 20.0)
     >>> round(float(a) * 1e6, 3), round(float(c) / 1e7, 4)
-    (2.038, 1.4943)
+    (2.038, 1.4945)
     """
     fs = _positive("fs", fs)
     sigma0 = _positive("sigma0", sigma0)

@@ -44,11 +44,11 @@ from scipy import optimize
 from .lugre import LuGreParameters, simulate_lugre
 
 __all__ = [
-    "IdentificationError",
-    "FrictionFit",
     "FrictionData",
-    "fit_steady_state",
+    "FrictionFit",
+    "IdentificationError",
     "fit_presliding",
+    "fit_steady_state",
     "read_friction_csv",
 ]
 
