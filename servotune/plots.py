@@ -215,7 +215,7 @@ def plot_equivalent_damping(params, omega: float, amplitude=None,
     amplitude = np.asarray(amplitude, dtype=float)
     closed = equivalent.equivalent_damping_stiction(params.fs, params.sigma0, amplitude, omega)
     ceq, _ = equivalent.describing_function(params, amplitude, omega, n_steps=512)
-    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
+    fig = Figure(figsize=(7.0, 5.2), layout="constrained")
     ax = fig.add_subplot()
     ax.loglog(amplitude * UM_PER_M, ceq, color="tab:red", lw=1.8,
               label="LuGre describing function (numerical)")
@@ -231,18 +231,19 @@ def plot_equivalent_damping(params, omega: float, amplitude=None,
     ax.axhline(params.sigma1 + params.sigma2, color="0.5", lw=0.8, ls="--",
                label=r"$\sigma_1 + \sigma_2$ (presliding)")
     ax.axvline(a0 * UM_PER_M, color="0.5", lw=0.8, ls=":")
-    ax.text(a0 * UM_PER_M, 0.97, r" $F_s/\sigma_0$", color="0.4", va="top",
+    ax.text(a0 * UM_PER_M, 0.03, r" $F_s/\sigma_0$", color="0.4", va="bottom",
             transform=ax.get_xaxis_transform())
     ax.set_xlabel("amplitude A [um]")
     ax.set_ylabel(r"equivalent damping $C_{eq}$ [N s/m]")
     ax.set_title(f"Equivalent viscous damping at {omega * HZ_PER_RAD_S:.3g} Hz (Eq 8-10)",
                  fontsize=11)
     ax.grid(True, which="both", alpha=0.4)
-    ax.legend(fontsize=8, loc="lower left")
+    fig.legend(fontsize=8, loc="outside lower center", ncol=2)
     return fig
 
 
-def plot_response_hysteresis(response, measured_force=None) -> Figure:
+def plot_response_hysteresis(response, measured_force=None,
+                             title: str = "Friction force against displacement") -> Figure:
     """Force against displacement of a simulated LuGre response, with measurements if given."""
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
@@ -253,7 +254,7 @@ def plot_response_hysteresis(response, measured_force=None) -> Figure:
             label="LuGre")
     ax.set_xlabel("displacement x [um]")
     ax.set_ylabel("friction force F [N]")
-    ax.set_title("Friction force against displacement", fontsize=11)
+    ax.set_title(title, fontsize=11)
     ax.grid(True, alpha=0.4)
-    ax.legend(loc="lower right")
+    ax.legend(loc="center", markerscale=4)
     return fig

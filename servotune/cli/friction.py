@@ -154,8 +154,11 @@ def run_fit(args) -> int:
             response = lugre.simulate_lugre(fit.parameters, data.t,
                                             displacement=data.displacement,
                                             z0=fit.estimate("f0")[0] / fit.parameters.sigma0)
-            report.save_figure(plots.plot_response_hysteresis(response, data.force), files[0],
-                               args.force)
+            title = (f"Measured and fitted presliding friction (Fig 2 / Fig 8)\n"
+                     f"sigma0 = {fit.parameters.sigma0:.4g} N/m, "
+                     f"sigma1 = {fit.parameters.sigma1:.4g} N s/m")
+            report.save_figure(plots.plot_response_hysteresis(response, data.force, title),
+                               files[0], args.force)
     result = fit.to_dict()
     result["data"] = str(args.data)
     result["figures"] = [str(f) for f in files]
