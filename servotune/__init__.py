@@ -27,6 +27,28 @@ from .frequency import (
 )
 from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
 from .structure import ModalModel, UnknownDofError
+from .friction import (
+    BIANCHI2014,
+    CANUDAS1995,
+    HysteresisCycle,
+    LuGreParameters,
+    LuGreResponse,
+    lugre_cycle,
+    lugre_derivative,
+    lugre_force,
+    lugre_jacobian,
+    presliding_linearisation,
+    simulate_lugre,
+    sliding_linearisation,
+    steady_state_friction,
+    stribeck_curve,
+)
+from .friction.equivalent import (
+    describing_function,
+    equivalent_damping_stiction,
+    stiction_describing_function,
+)
+from .friction.identify import FrictionFit, fit_presliding, fit_steady_state
 from .twomass import (
     TwoMassAnalysis,
     TwoMassSystem,
@@ -83,4 +105,25 @@ __all__ = [
     "optimal_peak",
     "peak_compliance",
     "two_mass_compliance",
+    # friction
+    "BIANCHI2014",
+    "CANUDAS1995",
+    "HysteresisCycle",
+    "LuGreParameters",
+    "LuGreResponse",
+    "lugre_cycle",
+    "lugre_derivative",
+    "lugre_force",
+    "lugre_jacobian",
+    "presliding_linearisation",
+    "simulate_lugre",
+    "sliding_linearisation",
+    "steady_state_friction",
+    "stribeck_curve",
+    "describing_function",
+    "equivalent_damping_stiction",
+    "stiction_describing_function",
+    "FrictionFit",
+    "fit_presliding",
+    "fit_steady_state",
 ]
