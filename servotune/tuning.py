@@ -55,7 +55,6 @@ from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
-from scipy import optimize
 
 from . import frequency
 from .drive import Drive, PIController
@@ -70,6 +69,7 @@ __all__ = [
     "Performance",
     "TuningResult",
     "RequirementsNotMetError",
+    "ResponseModel",
     "evaluate",
     "verify",
     "tune",
@@ -389,12 +389,13 @@ def _port_data(problem: TuningProblem, omega: np.ndarray) -> _PortData:
         u_inv = np.linalg.inv(u)
     else:
         lam = np.zeros((omega.size, 0))
+    rec_b = {b: rec @ vec[b] for b in names}  # (K, p)
     for a in names:
         for b in names:
-            pairs[(a, b)] = np.einsum("i,kij,j->k", vec[a], rec, vec[b])
+            pairs[(a, b)] = rec_b[b] @ vec[a]
             if n_p:
-                left = np.einsum("i,kip,kpq->kq", vec[a], rec[:, :, pad_idx], u)
-                right = np.einsum("kqp,kpj,j->kq", u_inv, rec[:, pad_idx, :], vec[b])
+                left = np.einsum("kp,kpq->kq", (vec[a] @ rec)[:, pad_idx], u)
+                right = np.einsum("kqp,kp->kq", u_inv, rec_b[b][:, pad_idx])
                 alpha[(a, b)] = left * right
     return _PortData(omega, pairs, alpha, lam, n_p)
 
@@ -467,14 +468,43 @@ def _grid(lo: float, hi: float, n: int) -> np.ndarray:
     return np.geomspace(lo, hi, n)
 
 
+class ResponseModel:
+    """The port-coupled responses of a problem on a fixed frequency grid, for many designs.
+
+    The structure's port receptances and their pad eigen-decompositions are computed once;
+    each call then costs a few vectorised complex operations.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from servotune.structure import ModalModel
+    >>> s = ModalModel([[5000.0, 0], [0, 1500.0]], [[16e6, -16e6], [-16e6, 16e6]],
+    ...                ["pad1.x", "wp.x"], damping_ratio=0.0)
+    >>> model = ResponseModel(TuningProblem(s, ["pad1.x"], c=4.912e5), [111.81])
+    >>> round(float(abs(model(Design(c=4.912e5))["compliance"][0])) * 16e6, 3)  # g(0.3), Eq 7
+    5.813
+    """
+
+    def __init__(self, problem: TuningProblem, omega):
+        self.problem = problem
+        self.data = _port_data(problem, np.asarray(omega, dtype=float))
+
+    @property
+    def omega(self) -> np.ndarray:
+        return self.data.omega
+
+    def __call__(self, design: Design) -> dict:
+        """``{"omega", "compliance", "loop_velocity", "loop_position"}`` as complex arrays."""
+        res = _responses(self.problem, self.data, design.to_dict())
+        return {"omega": self.data.omega, **{k: v.value() for k, v in res.items()}}
+
+
 def evaluate(problem: TuningProblem, design: Design, omega=None) -> dict:
     """The port-coupled responses of a design on a grid (numpy), as complex arrays."""
     req = problem.requirements
     if omega is None:
         omega = np.unique(np.concatenate([_grid(*req.band, 2000), _grid(*req.loop_band, 2000)]))
-    data = _port_data(problem, np.asarray(omega, dtype=float))
-    res = _responses(problem, data, design.to_dict())
-    return {"omega": data.omega, **{k: v.value() for k, v in res.items()}}
+    return ResponseModel(problem, omega)(design)
 
 
 def verify(problem: TuningProblem, design: Design) -> Performance:
@@ -488,8 +518,7 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
     """
     req = problem.requirements
     drive = problem.drive_for(design)
-    contact = (Contact("equivalent", stiffness=problem.contact_stiffness, damping=design.c)
-               if problem.pads else Contact.free())
+    contact = _contact(problem, design)
     plant = build_plant(problem.structure, drive, contact, problem.pads)
     # a log grid offset by a third of a step from any grid the optimiser builds
     n = 6001
@@ -652,27 +681,6 @@ class _Solver:
         return out
 
 
-def _refine_extrema(fun, omega, values, maximise: bool, count: int = 4) -> list[float]:
-    """Frequencies of the largest local extrema of ``values`` on ``omega``, each refined by a
-    bounded scalar search of ``fun`` (a function of one omega)."""
-    v = values if maximise else -values
-    inner = np.nonzero((v[1:-1] >= v[:-2]) & (v[1:-1] >= v[2:]))[0] + 1
-    cand = np.concatenate([inner, [int(np.argmax(v))]])
-    cand = np.unique(cand)
-    cand = cand[np.argsort(-v[cand])][:count]
-    out = []
-    sign = -1.0 if maximise else 1.0
-    for i in cand:
-        lo, hi = omega[max(i - 1, 0)], omega[min(i + 1, omega.size - 1)]
-        if hi <= lo:
-            out.append(float(omega[i]))
-            continue
-        res = optimize.minimize_scalar(lambda w: sign * fun(w), bounds=(lo, hi), method="bounded",
-                                       options={"xatol": 1e-10 * hi})
-        out.append(float(res.x))
-    return out
-
-
 def _stable(problem: TuningProblem, design: Design) -> bool:
     """Closed-loop stability of a design from the poles of the interconnected plant."""
     drive = problem.drive_for(design)
@@ -700,37 +708,66 @@ def _converged(stats) -> bool:
         "Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
-def _exchange_points(problem: TuningProblem, design: Design, band_grid, loop_grid, fine_band,
-                     fine_loop):
-    """True extrema of the design's responses (refined) and how far the grid misses them."""
-    added_band, added_loop, worst = [], [], 0.0
-    fine = evaluate(problem, design, fine_band)
-    on_grid = evaluate(problem, design, band_grid)
+def _local_extrema(omega, values, maximise: bool, count: int) -> list[float]:
+    """The ``count`` largest local maxima (or smallest minima) of ``values`` on a fine grid,
+    each placed between grid points by a parabola in log omega."""
+    v = values if maximise else -values
+    inner = np.nonzero((v[1:-1] >= v[:-2]) & (v[1:-1] >= v[2:]))[0] + 1
+    cand = np.unique(np.concatenate([inner, [int(np.argmax(v))]]))
+    cand = cand[np.argsort(-v[cand])][:count]
+    out = []
+    for i in cand:
+        if 0 < i < omega.size - 1:
+            x = np.log(omega[i - 1:i + 2])
+            a2, a1, _ = np.polyfit(x - x[1], v[i - 1:i + 2], 2)
+            if a2 < 0 and abs(a1 / (2 * a2)) <= x[2] - x[0]:
+                out.append(float(omega[i] * math.exp(-a1 / (2 * a2))))
+                continue
+        out.append(float(omega[i]))
+    return out
 
-    def at(w, key):
-        return complex(evaluate(problem, design, [w])[key][0])
 
+def _exchange_points(problem: TuningProblem, design: Design, models: dict):
+    """True extrema of a design's responses and how far the optimiser's grid misses them.
+
+    ``models`` holds :class:`ResponseModel` s on the fine band and loop grids and on the
+    optimiser's current grids. Candidates are located on the fine grids, placed between grid
+    points by a parabola, and evaluated exactly there.
+    """
+    fine_band, fine_loop = models["fine_band"](design), None
+    grid_band = models["band"](design)
+    checks = []  # (kind, omega)
     if problem.weights[0] > 0:
-        peaks = _refine_extrema(lambda w: abs(at(w, "compliance")), fine_band,
-                                np.abs(fine["compliance"]), True)
-        true = max(abs(at(w, "compliance")) for w in peaks)
-        worst = max(worst, true / np.abs(on_grid["compliance"]).max() - 1)
-        added_band += peaks
+        checks += [("peak", w) for w in _local_extrema(
+            fine_band["omega"], np.abs(fine_band["compliance"]), True, 4)]
     if problem.weights[1] > 0:
-        mins = _refine_extrema(lambda w: at(w, "compliance").real, fine_band,
-                               fine["compliance"].real, False)
-        true = min(at(w, "compliance").real for w in mins)
-        worst = max(worst, true / on_grid["compliance"].real.min() - 1)
-        added_band += mins
+        checks += [("real", w) for w in _local_extrema(
+            fine_band["omega"], fine_band["compliance"].real, False, 4)]
     if problem.drive is not None:
-        fine_l = evaluate(problem, design, fine_loop)
-        grid_l = evaluate(problem, design, loop_grid)
+        fine_loop = models["fine_loop"](design)
         for key in ("loop_velocity", "loop_position"):
-            mins = _refine_extrema(lambda w, key=key: abs(1 + at(w, key)), fine_loop,
-                                   np.abs(1 + fine_l[key]), False, count=3)
-            true = min(abs(1 + at(w, key)) for w in mins)
-            worst = max(worst, np.abs(1 + grid_l[key]).min() / true - 1)
-            added_loop += mins
+            checks += [(key, w) for w in _local_extrema(
+                fine_loop["omega"], np.abs(1 + fine_loop[key]), False, 3)]
+    exact = ResponseModel(problem, [w for _, w in checks])(design)
+    worst, added_band, added_loop = 0.0, [], []
+    for kind in ("peak", "real", "loop_velocity", "loop_position"):
+        sel = [i for i, (k, _) in enumerate(checks) if k == kind]
+        if not sel:
+            continue
+        ws = [checks[i][1] for i in sel]
+        if kind == "peak":
+            worst = max(worst, np.abs(exact["compliance"][sel]).max()
+                        / np.abs(grid_band["compliance"]).max() - 1)
+            added_band += ws
+        elif kind == "real":
+            worst = max(worst, exact["compliance"].real[sel].min()
+                        / grid_band["compliance"].real.min() - 1)
+            added_band += ws
+        else:
+            grid_loop = models["loop"](design)
+            worst = max(worst, np.abs(1 + grid_loop[kind]).min()
+                        / np.abs(1 + exact[kind][sel]).min() - 1)
+            added_loop += ws
     return added_band, added_loop, worst
 
 
@@ -802,12 +839,13 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
             "bounds of the free variables")
 
     design = best[1]
-    fine_band = _grid(*req.band, 6000)
-    fine_loop = _grid(*req.loop_band, 6000)
+    models = {"fine_band": ResponseModel(problem, _grid(*req.band, 6000)),
+              "fine_loop": ResponseModel(problem, _grid(*req.loop_band, 6000))}
     rounds, worst_rel = 0, math.inf
     for rounds in range(1, max_exchange + 1):  # noqa: B007
-        added_band, added_loop, worst_rel = _exchange_points(
-            problem, design, band_grid, loop_grid, fine_band, fine_loop)
+        models["band"] = ResponseModel(problem, band_grid)
+        models["loop"] = ResponseModel(problem, loop_grid)
+        added_band, added_loop, worst_rel = _exchange_points(problem, design, models)
         if worst_rel <= tolerance:
             break
         band_grid = np.unique(np.concatenate([band_grid, added_band]))
@@ -833,7 +871,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
                 lo = solver.lbg[sel]
                 if np.any(np.abs(g[sel] - lo) <= 1e-5 * np.maximum(1, np.abs(lo))):
                     active.append(group)
-    predicted = evaluate(problem, design, fine_band)
+    predicted = models["fine_band"](design)
     pred = {"peak_compliance": float(np.abs(predicted["compliance"]).max())}
     if problem.chatter is not None:
         pred["b_crit"] = problem.chatter.b_crit(float(predicted["compliance"].real.min()))

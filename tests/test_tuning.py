@@ -15,6 +15,7 @@ from servotune.tuning import (
     Design,
     Requirements,
     RequirementsNotMetError,
+    ResponseModel,
     TuningProblem,
     evaluate,
     tune,
@@ -64,20 +65,17 @@ def test_port_responses_equal_the_state_space_plant():
 def brute_force(problem, kp_values, c_values, omega_band, omega_loop):
     """Dense search of the same objective and constraints over (Kp, C), fixed Kv and Ti."""
     x0 = problem.initial_design()
-    h0 = np.abs(evaluate(problem, x0, np.geomspace(*problem.requirements.band, 4000))[
-        "compliance"]).max()
+    band, loop = ResponseModel(problem, omega_band), ResponseModel(problem, omega_loop)
     best = (math.inf, None)
     for kp in kp_values:
         for c in c_values:
             d = Design(c=c, kv=x0.kv, kp=kp, ti=x0.ti)
-            loops = evaluate(problem, d, omega_loop)
-            ok = all(np.abs(1 + loops[f"loop_{k}"]).min() >= 1 / problem.requirements.ms_limit(k)
-                     for k in ("velocity", "position"))
-            if not ok:
-                continue
-            value = np.abs(evaluate(problem, d, omega_band)["compliance"]).max() / h0
-            if value < best[0]:
-                best = (value, d)
+            loops = loop(d)
+            if all(np.abs(1 + loops[f"loop_{k}"]).min() >= 1 / problem.requirements.ms_limit(k)
+                   for k in ("velocity", "position")):
+                value = np.abs(band(d)["compliance"]).max()
+                if value < best[0]:
+                    best = (value, d)
     return best
 
 
@@ -88,15 +86,15 @@ def test_casadi_is_at_least_as_good_as_brute_force():
                             requirements=req, bounds={"c": (1e3, 2e6), "kp": (0.3, 30.0)})
     result = tune(problem, starts=3)
     assert result.success, result.reasons
-    omega_band = np.geomspace(*req.band, 1500)
-    omega_loop = np.geomspace(*req.loop_band, 1500)
+    omega_band = np.geomspace(*req.band, 600)
+    omega_loop = np.geomspace(*req.loop_band, 600)
     value, design = brute_force(problem, np.geomspace(0.3, 30.0, 41), np.geomspace(1e3, 2e6, 41),
                                 omega_band, omega_loop)
-    tuned = np.abs(evaluate(problem, result.design, omega_band)["compliance"]).max() / \
-        np.abs(evaluate(problem, result.initial, np.geomspace(*req.band, 4000))[
-            "compliance"]).max()
     assert design is not None
+    tuned = np.abs(ResponseModel(problem, omega_band)(result.design)["compliance"]).max()
     assert tuned <= value * (1 + 1e-6)
+    # and the brute-force optimum lies next to the casadi one (same basin, not a lucky grid)
+    assert abs(math.log(design.c / result.design.c)) < math.log(2e6 / 1e3) / 40 * 1.5
 
 
 def test_constraints_hold_on_a_grid_the_optimiser_never_saw():
