@@ -1,0 +1,50 @@
+"""Regenerative chatter in milling: stability lobes from the tool/work-piece compliance.
+
+The paper's measure of performance is the material removal capability, the regenerative-chatter
+stability limit computed from the dynamic compliance at the tool/work-piece contact (Bianchi
+et al. 2014, sec 2, "stability lobes diagrams"). This subpackage computes it two ways:
+
+- :mod:`~servotune.chatter.zoa`: the zero-order approximation of Altintas and Budak (1995),
+  fast and smooth in the compliance, with the absolute limit b_crit and a margin for tuning;
+- :mod:`~servotune.chatter.sdm`: the semi-discretisation of Insperger and Stepan (2002, 2004),
+  which keeps the time-periodic cutting force and finds the period-doubling (flip) lobes of low
+  radial immersion.
+
+:mod:`~servotune.chatter.setup` holds the milling set-up and the directional matrices;
+:mod:`~servotune.chatter.frf` turns python-control systems, measured FRFs and arrays into the
+2 x 2 compliance the analyses use.
+"""
+
+from .frf import Mode, compliance_matrix, frequency_grid, modal_compliance, read_frf_csv
+from .setup import (
+    MillingSetup,
+    directional_factor,
+    directional_matrix,
+    periodic_directional_matrix,
+)
+from .zoa import (
+    StabilityLobes,
+    absolute_stability_limit,
+    chatter_margin,
+    critical_depth,
+    oriented_frf,
+    stability_lobes,
+)
+
+__all__ = [
+    "MillingSetup",
+    "directional_matrix",
+    "directional_factor",
+    "periodic_directional_matrix",
+    "Mode",
+    "modal_compliance",
+    "frequency_grid",
+    "compliance_matrix",
+    "read_frf_csv",
+    "StabilityLobes",
+    "oriented_frf",
+    "critical_depth",
+    "absolute_stability_limit",
+    "stability_lobes",
+    "chatter_margin",
+]
