@@ -15,19 +15,37 @@ et al. 2014, sec 2, "stability lobes diagrams"). This subpackage computes it two
 2 x 2 compliance the analyses use.
 """
 
-from .frf import Mode, compliance_matrix, frequency_grid, modal_compliance, read_frf_csv
+from .frf import (
+    Mode,
+    compliance_matrix,
+    frequency_grid,
+    modal_compliance,
+    read_frf_csv,
+    system_response,
+)
 from .setup import (
     MillingSetup,
     directional_factor,
     directional_matrix,
     periodic_directional_matrix,
 )
+from .sdm import (
+    DEFAULT_INTERVALS,
+    CuttingStateSpace,
+    StabilityMap,
+    cutting_state_space,
+    monodromy_spectral_radius,
+    sdm_lobes,
+    stability_map,
+)
 from .zoa import (
     StabilityLobes,
     absolute_stability_limit,
     chatter_margin,
     critical_depth,
+    default_speed_range,
     oriented_frf,
+    spindle_speeds,
     stability_lobes,
 )
 
@@ -40,11 +58,21 @@ __all__ = [
     "modal_compliance",
     "frequency_grid",
     "compliance_matrix",
+    "system_response",
     "read_frf_csv",
     "StabilityLobes",
     "oriented_frf",
     "critical_depth",
     "absolute_stability_limit",
     "stability_lobes",
+    "default_speed_range",
+    "spindle_speeds",
     "chatter_margin",
+    "DEFAULT_INTERVALS",
+    "CuttingStateSpace",
+    "cutting_state_space",
+    "monodromy_spectral_radius",
+    "StabilityMap",
+    "stability_map",
+    "sdm_lobes",
 ]

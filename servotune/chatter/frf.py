@@ -161,7 +161,7 @@ def frequency_grid(system, omega_max: float | None = None, points: int = 1500) -
     """A frequency grid [rad/s] that resolves every resonance of a python-control system.
 
     A logarithmic base grid from a fifth of the lowest natural frequency to five times the
-    highest (or ``omega_max`` if higher) is merged with 241 points over
+    highest (or ``omega_max`` if higher) is merged with 801 points over
     ``w_n (1 + zeta t)``, t in [-10, 30], around each lightly damped pole, where the real part
     of the compliance has its negative lobe (width ~ zeta w_n).
 
@@ -182,7 +182,7 @@ def frequency_grid(system, omega_max: float | None = None, points: int = 1500) -
     if omega_max is not None:
         hi = max(hi, float(omega_max))
     parts = [np.geomspace(lo, hi, int(points))]
-    t = np.linspace(-10.0, 30.0, 241)
+    t = np.linspace(-10.0, 30.0, 801)
     for w, z in zip(wn, zeta, strict=True):
         if 0.0 < z < 0.3:
             band = w * (1.0 + z * t)

@@ -72,6 +72,8 @@ __all__ = [
     "critical_depth",
     "absolute_stability_limit",
     "stability_lobes",
+    "default_speed_range",
+    "spindle_speeds",
     "chatter_margin",
 ]
 
@@ -474,6 +476,12 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
     if speeds_rpm is None:
         minima = _lobe_minima_speeds(setup, wc, phi_c, 10)
         speeds = np.linspace(0.8 * minima[-1], 1.5 * minima[0], 2000)
+        if (omega is None and isinstance(system, (control.StateSpace, control.TransferFunction))):
+            w_needed = 1.1 * 2.0 * math.pi * setup.teeth * speeds[-1] / 60.0
+            if w_needed > w[-1]:
+                w, g = compliance_matrix(system, frequency_grid(system, omega_max=w_needed),
+                                         direction)
+                phi = oriented_frf(g, setup)
 
     with np.errstate(divide="ignore"):
         depth = np.where(re < 0.0, -1.0 / (2.0 * setup.kt * re), np.inf)  # (nf, 2)
@@ -511,6 +519,50 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
         b_crit=float(b_crit), critical_speed_rpm=critical_speed,
         critical_frequency=float(critical_freq), min_depth_limit=float(min_limit),
         lobe_speed_rpm=lobe_n, lobe_depth=np.array(lobe_d), lobe_count=lobe_count)
+
+
+def default_speed_range(system, setup: MillingSetup, *, omega=None,
+                        direction: str = "x") -> tuple[float, float]:
+    """A spindle-speed range [rpm] that shows the first ten lobes of the zero-order method.
+
+    From 0.8 times the speed of the 10th lobe minimum (k = 9) to 1.5 times the first (k = 0).
+
+    Examples
+    --------
+    >>> from servotune.chatter import Mode, modal_compliance
+    >>> wn = 2 * math.pi * 922.0
+    >>> lo, hi = default_speed_range(modal_compliance([Mode(wn, 0.011, 0.03993 * wn**2)]),
+    ...                              MillingSetup(teeth=2, kt=6e8, kn=2e8))
+    >>> round(lo), round(hi)
+    (2294, 55796)
+    """
+    setup = _check_setup(setup)
+    w, g = compliance_matrix(system, omega, direction)
+    _, wc, phi_c = _absolute_limit(system, direction, setup, w, oriented_frf(g, setup))
+    minima = _lobe_minima_speeds(setup, wc, phi_c, 10)
+    return 0.8 * float(minima[-1]), 1.5 * float(minima[0])
+
+
+def spindle_speeds(system, setup: MillingSetup, speed_range_rpm=None, count: int = 2000, *,
+                   omega=None, direction: str = "x") -> np.ndarray:
+    """``count`` equally spaced spindle speeds [rpm] over a range, by default
+    :func:`default_speed_range`.
+
+    Raises
+    ------
+    ValueError
+        If the range is not ``0 < low < high`` or count < 2.
+    """
+    if isinstance(count, bool) or int(count) != count or count < 2:
+        raise ValueError(f"the number of speeds must be a whole number >= 2, got {count!r}")
+    if speed_range_rpm is None:
+        lo, hi = default_speed_range(system, setup, omega=omega, direction=direction)
+    else:
+        lo, hi = (float(v) for v in speed_range_rpm)
+        if not 0.0 < lo < hi or not math.isfinite(hi):
+            raise ValueError(f"the speed range must satisfy 0 < low < high [rpm], got "
+                             f"{speed_range_rpm!r}")
+    return np.linspace(lo, hi, int(count))
 
 
 def chatter_margin(system, setup: MillingSetup, required_depth: float, speed_range_rpm=None,
