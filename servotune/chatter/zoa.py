@@ -376,7 +376,8 @@ def _envelope(speeds, lobe_n, depth, omega):
     """Lower envelope of piecewise-linear lobes on a speed grid.
 
     lobe_n: (L, nf) speeds of the lobe points; depth: (L, nf) with inf where invalid.
-    Every segment between two valid neighbours is sampled at the grid speeds it spans.
+    Every segment between two valid neighbours is sampled at the grid speeds it spans (linear
+    in 1/b, i.e. in Re Phi, along the speed).
     """
     n_a, n_b = lobe_n[:, :-1].ravel(), lobe_n[:, 1:].ravel()
     d_a, d_b = depth[:, :-1].ravel(), depth[:, 1:].ravel()
@@ -396,7 +397,10 @@ def _envelope(speeds, lobe_n, depth, omega):
     span = n_b - n_a
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.where(span[seg] != 0.0, (speeds[j] - n_a[seg]) / span[seg], 0.0)
-    b = d_a[seg] + t * (d_b - d_a)[seg]
+    # interpolate 1/b (proportional to Re Phi, smooth) rather than b, which grows like 1/x
+    # where Re Phi -> 0 on the steep flanks of the lobes
+    inv_a, inv_b = 1.0 / d_a, 1.0 / d_b
+    b = 1.0 / (inv_a[seg] + t * (inv_b - inv_a)[seg])
     w = w_a[seg] + t * (w_b - w_a)[seg]
     env = np.full(speeds.size, np.inf)
     np.minimum.at(env, j, b)
@@ -444,7 +448,7 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
     -----
     The lobes are parametric curves over the frequency grid (module docstring, Eq 2); their
     lower envelope on the speed grid is found by sampling every segment of every lobe at the
-    grid speeds it spans (linear interpolation), all at once.
+    grid speeds it spans (1/b linear in speed between lobe points), all at once.
 
     Examples
     --------
