@@ -19,6 +19,22 @@ from .twomass import (
     two_mass_compliance,
 )
 
+# chatter: stability lobes (servotune.chatter)
+from .chatter import (
+    MillingSetup,
+    Mode,
+    StabilityLobes,
+    StabilityMap,
+    absolute_stability_limit,
+    chatter_margin,
+    critical_depth,
+    modal_compliance,
+    read_frf_csv,
+    sdm_lobes,
+    stability_lobes,
+    stability_map,
+)
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -35,4 +51,17 @@ __all__ = [
     "optimal_peak",
     "peak_compliance",
     "two_mass_compliance",
+    # chatter
+    "MillingSetup",
+    "Mode",
+    "StabilityLobes",
+    "StabilityMap",
+    "absolute_stability_limit",
+    "chatter_margin",
+    "critical_depth",
+    "modal_compliance",
+    "read_frf_csv",
+    "sdm_lobes",
+    "stability_lobes",
+    "stability_map",
 ]
