@@ -153,7 +153,7 @@ def bench_sdm(repeat, sub):
                           for j in pick_d] for i in pick_s])
 
     t_loop, rho_loop = best_time(loop, 1)
-    t_vec_sub, sub_map = best_time(lambda: chatter.stability_map(
+    t_vec_sub, _ = best_time(lambda: chatter.stability_map(
         SYSTEM, s, speeds[pick_s], depths[pick_d], intervals=m), repeat)
     per_vec = t_vec / (speeds.size * depths.size)
     per_loop = t_loop / (sub * sub)
@@ -213,8 +213,9 @@ def main(argv=None):
         print(json.dumps(result, indent=2))
         return result
     z, s = result["zoa"], result["sdm"]
-    print(f"zero-order: {z['speeds']} speeds x {z['lobes']} lobes: {1e3 * z['vectorised_s']:.1f} ms "
-          f"(target 50 ms), loop over speeds {1e3 * z['speed_loop_s']:.0f} ms, "
+    print(f"zero-order: {z['speeds']} speeds x {z['lobes']} lobes: "
+          f"{1e3 * z['vectorised_s']:.1f} ms (target 50 ms), loop over speeds "
+          f"{1e3 * z['speed_loop_s']:.0f} ms, "
           f"speedup {z['speedup']:.0f}x, max rel. difference {z['max_relative_difference']:.1e}")
     print(f"semi-discretisation {s['grid'][0]} x {s['grid'][1]}, m = {s['intervals']}: "
           f"{s['vectorised_s']:.2f} s ({1e6 * s['vectorised_per_point_s']:.0f} us/point); loop "

@@ -5,20 +5,6 @@ Procedia CIRP 21 (2014) 367-372.
 Use as ``import servotune as st``. SI units throughout (m, N, s, kg, rad).
 """
 
-from .twomass import (
-    TwoMassAnalysis,
-    TwoMassSystem,
-    analyse_two_mass,
-    fixed_points,
-    g_alpha,
-    limit_resonances,
-    minimax_damping,
-    optimal_damping,
-    optimal_peak,
-    peak_compliance,
-    two_mass_compliance,
-)
-
 # chatter: stability lobes (servotune.chatter)
 from .chatter import (
     MillingSetup,
@@ -33,6 +19,19 @@ from .chatter import (
     sdm_lobes,
     stability_lobes,
     stability_map,
+)
+from .twomass import (
+    TwoMassAnalysis,
+    TwoMassSystem,
+    analyse_two_mass,
+    fixed_points,
+    g_alpha,
+    limit_resonances,
+    minimax_damping,
+    optimal_damping,
+    optimal_peak,
+    peak_compliance,
+    two_mass_compliance,
 )
 
 __version__ = "0.1.0"

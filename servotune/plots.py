@@ -108,7 +108,7 @@ def _finite_or_nan(values) -> np.ndarray:
 
 def plot_stability_lobes(results, required_depth: float | None = None,
                          labels=None, depth_max: float | None = None,
-                         title: str | None = None) -> Figure:
+                         title: str | None = None, ax=None) -> Figure:
     """Stability lobe diagram: axial depth limit [mm] over spindle speed [rpm].
 
     Parameters
@@ -124,6 +124,8 @@ def plot_stability_lobes(results, required_depth: float | None = None,
     depth_max : float, optional
         Upper end of the depth axis [m]; default 4 b_crit of the first result.
     title : str, optional
+    ax : matplotlib.axes.Axes, optional
+        Draw into these axes (e.g. one panel of a larger figure) and return their figure.
     """
     if not isinstance(results, (list, tuple)):
         results = [results]
@@ -132,8 +134,11 @@ def plot_stability_lobes(results, required_depth: float | None = None,
     first = results[0]
     setup = first.setup
     depth_max = 4.0 * first.b_crit if depth_max is None else float(depth_max)
-    fig = Figure(figsize=(8.0, 4.8), layout="constrained")
-    ax = fig.add_subplot()
+    if ax is None:
+        fig = Figure(figsize=(8.0, 4.8), layout="constrained")
+        ax = fig.add_subplot()
+    else:
+        fig = ax.figure
     colors = ["black", "tab:red", "tab:blue", "tab:green", "tab:purple"]
     lo, hi = first.speed_rpm[0], first.speed_rpm[-1]
     for i, res in enumerate(results):

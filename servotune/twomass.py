@@ -42,17 +42,17 @@ import numpy as np
 from scipy import optimize
 
 __all__ = [
-    "TwoMassSystem",
     "TwoMassAnalysis",
-    "two_mass_compliance",
+    "TwoMassSystem",
+    "analyse_two_mass",
     "fixed_points",
+    "g_alpha",
+    "limit_resonances",
+    "minimax_damping",
     "optimal_damping",
     "optimal_peak",
-    "limit_resonances",
     "peak_compliance",
-    "minimax_damping",
-    "analyse_two_mass",
-    "g_alpha",
+    "two_mass_compliance",
 ]
 
 LAYOUTS = ("A", "B")

@@ -1,4 +1,5 @@
-"""Milling set-up and directional matrices against quadrature of the force model and closed forms."""
+"""Milling set-up and directional matrices against quadrature of the force model and closed
+forms."""
 
 import math
 
@@ -18,7 +19,7 @@ def h_instantaneous(setup, phi0):
     """H (..., 2, 2) at tooth-0 angles phi0, summed over the teeth straight from the force
     projections (Insperger et al. 2003, Eq 4-7), written independently of the module."""
     phi0 = np.asarray(phi0, dtype=float)
-    out = np.zeros(phi0.shape + (2, 2))
+    out = np.zeros((*phi0.shape, 2, 2))
     for j in range(setup.teeth):
         phi = (phi0 + 2 * math.pi * j / setup.teeth) % (2 * math.pi)
         g = (setup.entry_angle < phi) & (phi < setup.exit_angle)

@@ -131,7 +131,7 @@ def limit_by_characteristic_equation(system, setup, speed_rpm, omega):
 ])
 def test_envelope_solves_the_characteristic_equation(system, setup):
     rng = np.random.default_rng(7)
-    b_crit, wc = absolute_stability_limit(system, setup)
+    _, wc = absolute_stability_limit(system, setup)
     lo, hi = 60 * wc / (setup.teeth * 8 * math.pi), 60 * wc / (setup.teeth * 1.2 * math.pi)
     speeds = np.linspace(lo, hi, 3001)
     result = stability_lobes(system, setup, speeds)
@@ -144,7 +144,7 @@ def test_envelope_solves_the_characteristic_equation(system, setup):
 
 
 def test_oriented_frf_are_the_eigenvalues():
-    w, g = compliance_matrix(coupled_system(), np.linspace(2000, 9000, 20001))
+    _, g = compliance_matrix(coupled_system(), np.linspace(2000, 9000, 20001))
     setup = MillingSetup(teeth=4, kt=1.2e9, kn=4e8, radial_immersion=0.4)
     phi = oriented_frf(g, setup)
     ref = np.linalg.eigvals(g @ directional_matrix(setup) / setup.kt)

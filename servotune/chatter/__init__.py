@@ -23,12 +23,6 @@ from .frf import (
     read_frf_csv,
     system_response,
 )
-from .setup import (
-    MillingSetup,
-    directional_factor,
-    directional_matrix,
-    periodic_directional_matrix,
-)
 from .sdm import (
     DEFAULT_INTERVALS,
     CuttingStateSpace,
@@ -37,6 +31,12 @@ from .sdm import (
     monodromy_spectral_radius,
     sdm_lobes,
     stability_map,
+)
+from .setup import (
+    MillingSetup,
+    directional_factor,
+    directional_matrix,
+    periodic_directional_matrix,
 )
 from .zoa import (
     StabilityLobes,
@@ -50,29 +50,29 @@ from .zoa import (
 )
 
 __all__ = [
-    "MillingSetup",
-    "directional_matrix",
-    "directional_factor",
-    "periodic_directional_matrix",
-    "Mode",
-    "modal_compliance",
-    "frequency_grid",
-    "compliance_matrix",
-    "system_response",
-    "read_frf_csv",
-    "StabilityLobes",
-    "oriented_frf",
-    "critical_depth",
-    "absolute_stability_limit",
-    "stability_lobes",
-    "default_speed_range",
-    "spindle_speeds",
-    "chatter_margin",
     "DEFAULT_INTERVALS",
     "CuttingStateSpace",
-    "cutting_state_space",
-    "monodromy_spectral_radius",
+    "MillingSetup",
+    "Mode",
+    "StabilityLobes",
     "StabilityMap",
-    "stability_map",
+    "absolute_stability_limit",
+    "chatter_margin",
+    "compliance_matrix",
+    "critical_depth",
+    "cutting_state_space",
+    "default_speed_range",
+    "directional_factor",
+    "directional_matrix",
+    "frequency_grid",
+    "modal_compliance",
+    "monodromy_spectral_radius",
+    "oriented_frf",
+    "periodic_directional_matrix",
+    "read_frf_csv",
     "sdm_lobes",
+    "spindle_speeds",
+    "stability_lobes",
+    "stability_map",
+    "system_response",
 ]

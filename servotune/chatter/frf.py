@@ -33,13 +33,13 @@ import numpy as np
 from .setup import DIRECTIONS, _direction_index
 
 __all__ = [
-    "Mode",
-    "modal_compliance",
-    "frequency_grid",
-    "compliance_matrix",
-    "system_response",
-    "read_frf_csv",
     "FRF_CSV_TERMS",
+    "Mode",
+    "compliance_matrix",
+    "frequency_grid",
+    "modal_compliance",
+    "read_frf_csv",
+    "system_response",
 ]
 
 #: CSV column stems of the four compliance terms (``re_xx_m_per_n``, ``im_xx_m_per_n``, ...)
@@ -221,7 +221,7 @@ def _check_omega(omega) -> np.ndarray:
 def _embed(h: np.ndarray, direction: str) -> np.ndarray:
     """SISO response (nfreq,) into the 2 x 2 matrix (nfreq, 2, 2) with one flexible direction."""
     d = _direction_index(direction)
-    g = np.zeros(h.shape + (2, 2), dtype=complex)
+    g = np.zeros((*h.shape, 2, 2), dtype=complex)
     g[:, d, d] = h
     return g
 

@@ -1,4 +1,4 @@
-"""Semi-discretisation of milling stability (Insperger and Stepan): monodromy over a (speed, depth) grid.
+"""Semi-discretisation of milling stability (Insperger and Stepan): the monodromy matrix.
 
 With the compliance in state-space form, ``x' = A x + B F``, ``q = C x`` (q the tool/work-piece
 displacement in the flexible directions, F the cutting force there) and the regenerative force
@@ -67,13 +67,13 @@ from .zoa import (
 )
 
 __all__ = [
+    "DEFAULT_INTERVALS",
     "CuttingStateSpace",
+    "StabilityMap",
     "cutting_state_space",
     "monodromy_spectral_radius",
-    "StabilityMap",
-    "stability_map",
     "sdm_lobes",
-    "DEFAULT_INTERVALS",
+    "stability_map",
 ]
 
 #: intervals per tooth period used when none are given (see tests/test_chatter_sdm.py for the
@@ -225,7 +225,7 @@ def monodromy_spectral_radius(model: CuttingStateSpace, h, period, depth,
         raise ValueError("h must be a stack (m, r, r) of m >= 2 directional matrices")
     if h.shape[1:] == (2, 2) and len(model.directions) == 1:
         h = h[:, model.directions][:, :, model.directions]
-    n, r = model.b.shape
+    r = model.b.shape[1]
     if h.shape[1:] != (r, r):
         raise ValueError(f"h must be (m, {r}, {r}) for this model, got {h.shape}")
     period, depth = np.broadcast_arrays(np.asarray(period, dtype=float),

@@ -57,11 +57,11 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
-    "MillingSetup",
-    "directional_matrix",
-    "directional_factor",
-    "periodic_directional_matrix",
     "DIRECTIONS",
+    "MillingSetup",
+    "directional_factor",
+    "directional_matrix",
+    "periodic_directional_matrix",
 ]
 
 MILLING_MODES = ("down", "up")
@@ -206,7 +206,7 @@ def _antiderivative(setup: MillingSetup, phi) -> np.ndarray:
     phi = np.asarray(phi, dtype=float)
     kt, kn = setup.kt, setup.kn
     s2, c2 = np.sin(2.0 * phi), np.cos(2.0 * phi)
-    out = np.empty(phi.shape + (2, 2))
+    out = np.empty((*phi.shape, 2, 2))
     out[..., 0, 0] = -0.25 * kt * c2 + 0.5 * kn * (phi - 0.5 * s2)
     out[..., 0, 1] = 0.5 * kt * (phi + 0.5 * s2) - 0.25 * kn * c2
     out[..., 1, 0] = -0.5 * kt * (phi - 0.5 * s2) - 0.25 * kn * c2

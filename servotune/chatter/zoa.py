@@ -68,13 +68,13 @@ from .setup import MillingSetup, directional_matrix
 
 __all__ = [
     "StabilityLobes",
-    "oriented_frf",
-    "critical_depth",
     "absolute_stability_limit",
-    "stability_lobes",
-    "default_speed_range",
-    "spindle_speeds",
     "chatter_margin",
+    "critical_depth",
+    "default_speed_range",
+    "oriented_frf",
+    "spindle_speeds",
+    "stability_lobes",
 ]
 
 #: the most lobes the automatic choice will trace before asking for a higher lowest speed

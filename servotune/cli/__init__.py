@@ -11,7 +11,7 @@ import argparse
 import importlib
 import sys
 
-__all__ = ["main", "build_parser"]
+__all__ = ["build_parser", "main"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
 COMMANDS = ("twomass", "lobes")
