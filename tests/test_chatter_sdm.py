@@ -223,3 +223,11 @@ def test_bad_input_is_a_clear_error(make, words):
         warnings.simplefilter("ignore")
         with pytest.raises(ValueError, match=words):
             make()
+
+
+def test_transfer_function_input():
+    tf = control.tf([1 / MASS], [1, 2 * ZETA * WN, WN**2])
+    s = setup(1.0)
+    args = (np.linspace(15000, 17000, 5), 1e-3)
+    assert_allclose(sdm_lobes(tf, s, *args, intervals=20).depth_limit,
+                    sdm_lobes(BENCH, s, *args, intervals=20).depth_limit, rtol=1e-6)

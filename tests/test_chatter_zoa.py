@@ -261,3 +261,21 @@ def test_bad_csv_is_refused(tmp_path, header, words):
     path.write_text(header + "\n" + "\n".join(",".join(["1e-6"] * n) for _ in range(5)))
     with pytest.raises(ValueError, match=words):
         read_frf_csv(path)
+
+
+def test_envelope_does_not_depend_on_the_lobe_chunks(monkeypatch):
+    import servotune.chatter.zoa as zoa
+
+    speeds = np.linspace(3000, 40000, 3000)
+    whole = stability_lobes(BENCH, SLOT, speeds, lobes=20)
+    monkeypatch.setattr(zoa, "_POINTS_PER_CHUNK", 20_000)  # one or two lobes per chunk
+    chunked = stability_lobes(BENCH, SLOT, speeds, lobes=20)
+    assert_allclose(chunked.depth_limit, whole.depth_limit, rtol=0, atol=0)
+
+
+def test_transfer_function_input():
+    # the single mode as a transfer function (1/m) / (s^2 + 2 zeta wn s + wn^2)
+    tf = control.tf([1 / 0.03993], [1, 2 * ZETA * WN, WN**2])
+    b_tf, w_tf = absolute_stability_limit(tf, SLOT)
+    b_ss, w_ss = absolute_stability_limit(BENCH, SLOT)
+    assert_allclose([b_tf, w_tf], [b_ss, w_ss], rtol=1e-8)

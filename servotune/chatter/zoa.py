@@ -79,6 +79,8 @@ __all__ = [
 
 #: the most lobes the automatic choice will trace before asking for a higher lowest speed
 MAX_LOBES = 5000
+#: lobe points handled at once when the envelope is formed (bounds the memory to ~ 0.3 GB)
+_POINTS_PER_CHUNK = 4_000_000
 HZ_PER_RAD_S = 1.0 / (2.0 * math.pi)
 
 
@@ -294,8 +296,9 @@ class StabilityLobes:
         in the range).
     lobe_speed_rpm, lobe_depth : numpy.ndarray
         Zero-order: the individual lobes, one row per (lobe number, eigenvalue branch), as
-        parametric curves over the frequency grid (inf where Re Phi >= 0). Empty for the
-        semi-discretisation.
+        parametric curves over the frequency grid (inf where Re Phi >= 0), for k = 0, 1, ...
+        as far as a memory budget of 4e6 points allows (all of them for ordinary grids).
+        Empty for the semi-discretisation.
     lobe_count : int
         Number of lobes traced (zero-order) per eigenvalue branch.
     depth_ceiling : float
@@ -503,13 +506,24 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
         if isinstance(lobes, bool) or int(lobes) != lobes or lobes < 1:
             raise ValueError(f"lobes must be a whole number >= 1, got {lobes!r}")
         lobe_count = int(lobes)
-    k = np.arange(lobe_count)[:, None, None]
-    # (k, branch, nf): speed of every lobe point
-    lobe_n = 60.0 * w[None, None, :] / (setup.teeth * (theta.T[None] + 2.0 * math.pi * k))
-    lobe_d = np.broadcast_to(depth.T[None], lobe_n.shape)
-    lobe_n = lobe_n.reshape(-1, w.size)
-    lobe_d = lobe_d.reshape(-1, w.size)
-    env, freq = _envelope(speeds, lobe_n, lobe_d, w)
+    # lobes in chunks of at most _POINTS_PER_CHUNK points (memory); the curves of the first
+    # chunk are kept for plotting
+    per_chunk = max(1, _POINTS_PER_CHUNK // (2 * w.size))
+    env = np.full(speeds.size, np.inf)
+    freq = np.full(speeds.size, np.nan)
+    kept_n = kept_d = None
+    for first in range(0, lobe_count, per_chunk):
+        k = np.arange(first, min(first + per_chunk, lobe_count))[:, None, None]
+        # (k, branch, nf): speed of every lobe point
+        lobe_n = 60.0 * w[None, None, :] / (setup.teeth * (theta.T[None] + 2.0 * math.pi * k))
+        lobe_d = np.broadcast_to(depth.T[None], lobe_n.shape)
+        lobe_n = lobe_n.reshape(-1, w.size)
+        lobe_d = lobe_d.reshape(-1, w.size)
+        env_k, freq_k = _envelope(speeds, lobe_n, lobe_d, w)
+        lower = env_k < env
+        env[lower], freq[lower] = env_k[lower], freq_k[lower]
+        if kept_n is None:
+            kept_n, kept_d = lobe_n, np.array(lobe_d)
 
     minima = _lobe_minima_speeds(setup, wc, phi_c, lobe_count)
     inside = minima[(minima >= speeds[0]) & (minima <= speeds[-1])]
@@ -522,7 +536,7 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
         setup=setup, method="zoa", speed_rpm=speeds, depth_limit=env, chatter_frequency=freq,
         b_crit=float(b_crit), critical_speed_rpm=critical_speed,
         critical_frequency=float(critical_freq), min_depth_limit=float(min_limit),
-        lobe_speed_rpm=lobe_n, lobe_depth=np.array(lobe_d), lobe_count=lobe_count)
+        lobe_speed_rpm=kept_n, lobe_depth=kept_d, lobe_count=lobe_count)
 
 
 def default_speed_range(system, setup: MillingSetup, *, omega=None,
