@@ -5,6 +5,50 @@ Procedia CIRP 21 (2014) 367-372.
 Use as ``import servotune as st``. SI units throughout (m, N, s, kg, rad).
 """
 
+from .drive import (
+    Drive,
+    LowPassFilter,
+    Motor,
+    NotchFilter,
+    PIController,
+    kv_from_m_per_min_per_mm,
+    kv_to_m_per_min_per_mm,
+)
+from .frequency import (
+    ClosedLoopPoles,
+    LoopAnalysis,
+    analyse_loop,
+    closed_loop_poles,
+    compliance,
+    fast_frequency_response,
+    following_error,
+    modal_receptance,
+    port_compliance,
+)
+from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
+from .structure import ModalModel, UnknownDofError
+from .friction import (
+    BIANCHI2014,
+    CANUDAS1995,
+    HysteresisCycle,
+    LuGreParameters,
+    LuGreResponse,
+    lugre_cycle,
+    lugre_derivative,
+    lugre_force,
+    lugre_jacobian,
+    presliding_linearisation,
+    simulate_lugre,
+    sliding_linearisation,
+    steady_state_friction,
+    stribeck_curve,
+)
+from .friction.equivalent import (
+    describing_function,
+    equivalent_damping_stiction,
+    stiction_describing_function,
+)
+from .friction.identify import FrictionFit, fit_presliding, fit_steady_state
 # chatter: stability lobes (servotune.chatter)
 from .chatter import (
     MillingSetup,
@@ -38,6 +82,32 @@ __version__ = "0.1.0"
 
 __all__ = [
     "__version__",
+    # drive
+    "Drive",
+    "LowPassFilter",
+    "Motor",
+    "NotchFilter",
+    "PIController",
+    "kv_from_m_per_min_per_mm",
+    "kv_to_m_per_min_per_mm",
+    # plant
+    "Contact",
+    "UnstableLoopError",
+    "build_plant",
+    "loop_transfer",
+    # frequency
+    "ClosedLoopPoles",
+    "LoopAnalysis",
+    "analyse_loop",
+    "closed_loop_poles",
+    "compliance",
+    "fast_frequency_response",
+    "following_error",
+    "modal_receptance",
+    "port_compliance",
+    # structure
+    "ModalModel",
+    "UnknownDofError",
     # twomass
     "TwoMassSystem",
     "TwoMassAnalysis",
@@ -50,6 +120,27 @@ __all__ = [
     "optimal_peak",
     "peak_compliance",
     "two_mass_compliance",
+    # friction
+    "BIANCHI2014",
+    "CANUDAS1995",
+    "HysteresisCycle",
+    "LuGreParameters",
+    "LuGreResponse",
+    "lugre_cycle",
+    "lugre_derivative",
+    "lugre_force",
+    "lugre_jacobian",
+    "presliding_linearisation",
+    "simulate_lugre",
+    "sliding_linearisation",
+    "steady_state_friction",
+    "stribeck_curve",
+    "describing_function",
+    "equivalent_damping_stiction",
+    "stiction_describing_function",
+    "FrictionFit",
+    "fit_presliding",
+    "fit_steady_state",
     # chatter
     "MillingSetup",
     "Mode",

@@ -13,13 +13,7 @@ from matplotlib.figure import Figure
 
 from . import twomass
 
-__all__ = [
-    "plot_g_alpha",
-    "plot_two_mass_compliance",
-    # chatter
-    "plot_stability_lobes",
-    "plot_stability_map",
-]
+__all__ = ["plot_g_alpha", "plot_two_mass_compliance"]
 
 HZ_PER_RAD_S = 1.0 / (2.0 * math.pi)
 
@@ -98,7 +92,181 @@ def plot_two_mass_compliance(analysis: twomass.TwoMassAnalysis, f_max_hz: float 
     return fig
 
 
-# --- chatter: stability lobe diagrams -------------------------------------------------------
+# ---------------------------------------------------------------- friction (servotune.friction)
+
+__all__ += [
+    "plot_equivalent_damping",
+    "plot_hysteresis",
+    "plot_response_hysteresis",
+    "plot_stribeck",
+]
+
+UM_PER_M = 1e6
+
+
+def plot_stribeck(params, v=None, force=None, v_max: float | None = None,
+                  title: str = "Sliding friction against velocity (Fig 7)") -> Figure:
+    """Steady-state friction F_ss(v) of a LuGre contact, with measured points if given (Fig 7).
+
+    Parameters
+    ----------
+    params : servotune.friction.LuGreParameters
+    v, force : array_like, optional
+        Measured velocities [m/s] and friction forces [N].
+    v_max : float, optional
+        Half-width of the velocity axis [m/s]; default the data's, or 0.5 m/s (Fig 7).
+    """
+    from .friction import lugre
+
+    if v_max is None:
+        v_max = float(np.max(np.abs(v))) if v is not None else 0.5
+    grid = np.concatenate([-np.geomspace(v_max, 1e-6 * v_max, 400),
+                           np.geomspace(1e-6 * v_max, v_max, 400)])
+    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    if v is not None and force is not None:
+        ax.plot(v, force, "o", ms=4, mfc="none", color="tab:blue", label="measured")
+    ax.plot(grid, lugre.steady_state_friction(params, grid), color="tab:red", lw=1.8,
+            label="LuGre steady state" + (" (fitted)" if v is not None else ""))
+    for sign in (-1, 1):
+        ax.axvline(sign * params.vs, color="0.5", lw=0.8, ls=":")
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    ax.axvline(0.0, color="0.3", lw=0.6)
+    ax.text(params.vs, 0.0, r" $v_s$", color="0.4", va="bottom")
+    ax.set_xlim(-v_max, v_max)
+    ax.set_xlabel("sliding velocity v [m/s]")
+    ax.set_ylabel("friction force F [N]")
+    ax.set_title(f"{title}\nFc = {params.fc:.4g} N, Fs = {params.fs:.4g} N, "
+                 f"vs = {params.vs:.3g} m/s, delta = {params.delta:.3g}, "
+                 f"sigma2 = {params.sigma2:.4g} N s/m", fontsize=10)
+    ax.grid(True, alpha=0.4)
+    ax.legend(loc="lower right")
+    return fig
+
+
+def _stiction_loop(fs: float, sigma0: float, amplitude: float, n: int = 721):
+    """The idealised elasto-plastic cycle of Fig 6 over one period (for drawing)."""
+    theta = np.linspace(-0.5 * math.pi, 1.5 * math.pi, n)
+    x = amplitude * np.sin(theta)
+    f = np.empty_like(x)
+    f[0] = -min(fs, sigma0 * amplitude)
+    for i in range(1, x.size):
+        f[i] = min(max(f[i - 1] + sigma0 * (x[i] - x[i - 1]), -fs), fs)
+    return x, f
+
+
+def plot_hysteresis(cycle, params=None) -> Figure:
+    """Friction force against displacement over one period, one loop per amplitude (Fig 2/6).
+
+    Parameters
+    ----------
+    cycle : servotune.friction.HysteresisCycle
+        From :func:`servotune.friction.lugre_cycle` with a 1-D batch of amplitudes at one
+        frequency (or a single amplitude).
+    params : servotune.friction.LuGreParameters, optional
+        If given, the paper's idealised stiction cycle (Fig 6: spring sigma0 up to +-Fs, then
+        sliding) is drawn dashed for the same amplitudes.
+    """
+    amplitude = np.atleast_1d(cycle.amplitude)
+    x = np.atleast_2d(cycle.displacement)
+    force = np.atleast_2d(cycle.force)
+    ceq = np.atleast_1d(cycle.ceq)
+    fig = Figure(figsize=(7.5, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    for i, a in enumerate(amplitude):
+        ax.plot(x[i] * UM_PER_M, force[i], color=f"C{i % 10}", lw=1.6,
+                label=f"A = {a * UM_PER_M:.3g} um: Ceq = {ceq[i]:.3g} N s/m")
+        if params is not None:
+            xs, fs_ = _stiction_loop(params.fs, params.sigma0, float(a))
+            ax.plot(xs * UM_PER_M, fs_, color=f"C{i % 10}", lw=1.0, ls="--",
+                    label="idealised stiction cycle (Fig 6)" if i == amplitude.size - 1
+                    else None)
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    ax.axvline(0.0, color="0.3", lw=0.6)
+    ax.set_xlabel("displacement x [um]")
+    ax.set_ylabel("friction force F [N]")
+    f_hz = float(np.atleast_1d(cycle.omega)[0]) * HZ_PER_RAD_S
+    ax.set_title(f"LuGre hysteresis loops under x = A sin(wt), {f_hz:.3g} Hz (Fig 2 / Fig 6)",
+                 fontsize=11)
+    ax.grid(True, alpha=0.4)
+    ax.legend(fontsize=8, loc="upper left")
+    return fig
+
+
+def plot_equivalent_damping(params, omega: float, amplitude=None,
+                            show_printed: bool = True) -> Figure:
+    """Equivalent viscous damping against amplitude: closed form and LuGre (Eq 8-10).
+
+    Parameters
+    ----------
+    params : servotune.friction.LuGreParameters
+    omega : float
+        Angular frequency [rad/s].
+    amplitude : array_like, optional
+        Amplitudes [m]; default 0.05 to 50 times Fs/sigma0.
+    show_printed : bool
+        Also draw the paper's printed Eq 9 (half the cycle's area), dotted.
+    """
+    from .friction import equivalent
+
+    a0 = params.fs / params.sigma0
+    if amplitude is None:
+        amplitude = np.geomspace(0.05 * a0, 50.0 * a0, 120)
+    amplitude = np.asarray(amplitude, dtype=float)
+    closed = equivalent.equivalent_damping_stiction(params.fs, params.sigma0, amplitude, omega)
+    ceq, _ = equivalent.describing_function(params, amplitude, omega, n_steps=512)
+    fig = Figure(figsize=(7.0, 5.2), layout="constrained")
+    ax = fig.add_subplot()
+    ax.loglog(amplitude * UM_PER_M, ceq, color="tab:red", lw=1.8,
+              label="LuGre describing function (numerical)")
+    pos = closed > 0
+    ax.loglog(amplitude[pos] * UM_PER_M, closed[pos], color="tab:blue", lw=1.8,
+              label=r"stiction cycle: $4F_s(A - F_s/\sigma_0)/(\pi\omega A^2)$")
+    if show_printed:
+        ax.loglog(amplitude[pos] * UM_PER_M, 0.5 * closed[pos], color="tab:blue", lw=1.0,
+                  ls=":", label="as printed in the paper (Eq 9, half the area)")
+    a_peak, c_peak = equivalent.stiction_peak_damping(params.fs, params.sigma0, omega)
+    ax.plot([float(a_peak) * UM_PER_M], [float(c_peak)], "o", color="tab:blue",
+            label=rf"max $\sigma_0/(\pi\omega)$ = {float(c_peak):.3g} N s/m")
+    ax.axhline(params.sigma1 + params.sigma2, color="0.5", lw=0.8, ls="--",
+               label=r"$\sigma_1 + \sigma_2$ (presliding)")
+    ax.axvline(a0 * UM_PER_M, color="0.5", lw=0.8, ls=":")
+    ax.text(a0 * UM_PER_M, 0.03, r" $F_s/\sigma_0$", color="0.4", va="bottom",
+            transform=ax.get_xaxis_transform())
+    ax.set_xlabel("amplitude A [um]")
+    ax.set_ylabel(r"equivalent damping $C_{eq}$ [N s/m]")
+    ax.set_title(f"Equivalent viscous damping at {omega * HZ_PER_RAD_S:.3g} Hz (Eq 8-10)",
+                 fontsize=11)
+    ax.grid(True, which="both", alpha=0.4)
+    fig.legend(fontsize=8, loc="outside lower center", ncol=2)
+    return fig
+
+
+def plot_response_hysteresis(response, measured_force=None,
+                             title: str = "Friction force against displacement") -> Figure:
+    """Force against displacement of a simulated LuGre response, with measurements if given."""
+    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    if measured_force is not None:
+        ax.plot(response.displacement * UM_PER_M, measured_force, ".", ms=2, color="0.55",
+                label="measured")
+    ax.plot(response.displacement * UM_PER_M, response.force, color="tab:red", lw=1.4,
+            label="LuGre")
+    ax.set_xlabel("displacement x [um]")
+    ax.set_ylabel("friction force F [N]")
+    ax.set_title(title, fontsize=11)
+    ax.grid(True, alpha=0.4)
+    ax.legend(loc="center", markerscale=4)
+    return fig
+
+
+# ------------------------------------------------------------------ chatter (servotune.chatter)
+
+__all__ += [
+    "plot_stability_lobes",
+    "plot_stability_map",
+]
+
 
 def _finite_or_nan(values) -> np.ndarray:
     values = np.array(values, dtype=float)

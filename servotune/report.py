@@ -11,7 +11,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["OutputExistsError", "check_writable", "save_figure", "write_atomically", "write_json"]
+__all__ = ["OutputExistsError", "check_writable", "write_atomically", "save_figure", "write_json"]
 
 
 class OutputExistsError(FileExistsError):

@@ -42,17 +42,17 @@ import numpy as np
 from scipy import optimize
 
 __all__ = [
-    "TwoMassAnalysis",
     "TwoMassSystem",
-    "analyse_two_mass",
+    "TwoMassAnalysis",
+    "two_mass_compliance",
     "fixed_points",
-    "g_alpha",
-    "limit_resonances",
-    "minimax_damping",
     "optimal_damping",
     "optimal_peak",
+    "limit_resonances",
     "peak_compliance",
-    "two_mass_compliance",
+    "minimax_damping",
+    "analyse_two_mass",
+    "g_alpha",
 ]
 
 LAYOUTS = ("A", "B")

@@ -11,10 +11,10 @@ import argparse
 import importlib
 import sys
 
-__all__ = ["build_parser", "main"]
+__all__ = ["main", "build_parser"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("twomass", "lobes")
+COMMANDS = ("twomass", "friction", "lobes")
 
 
 def build_parser() -> argparse.ArgumentParser:

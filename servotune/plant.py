@@ -1,0 +1,271 @@
+"""The linearised feed axis: structure, guide-way contacts and the drive in one python-control system.
+
+:func:`build_plant` interconnects (``control.interconnect``) the reduced structure
+(:class:`~servotune.structure.ModalModel`), one linear contact element per guide-way pad
+(:class:`Contact`) and the cascade of :mod:`servotune.drive`::
+
+      x_ref, v_ref, a_ref              f_wp_x/y/z            t_dist
+            |                              |                    |
+        [drive cascade] --torque--> [ motor port ] ---> [ structure ] ---> wp_x/y/z, slide_x
+            ^      ^                                      |      ^
+            |      +------ omega_fb (rotor - stator) -----+      |
+            +------------- x_fb (linear or motor encoder) -------+
+                                                   pad x, v  |   | -F_pad
+                                                        [ contact per pad ]
+
+Plant inputs: ``x_ref`` [m], ``v_ref`` [m/s], ``a_ref`` [m/s^2], ``f_wp_x``, ``f_wp_y``,
+``f_wp_z`` [N] (those the structure has), ``t_dist`` [N m] (disturbance torque on the rotor).
+Plant outputs: ``wp_x``, ``wp_y``, ``wp_z`` [m], ``slide_x`` [m] (the position feedback
+signal), ``omega_motor`` [rad/s], ``following_error`` [m], ``torque`` [N m], ``current`` [A].
+
+Guide-way friction is linearised per pad (all axis friction is lumped at the pads, paper sec 3;
+the values of a :class:`Contact` are axis totals shared equally by the pads):
+
+- ``locked``: the pads are held rigidly (the pad DOFs are removed);
+- ``stiction``: the LuGre presliding linearisation, a spring sigma0 with a damper
+  sigma1 + sigma2;
+- ``viscous``: a damper C;
+- ``equivalent``: the describing function at a vibration amplitude, Ceq with Keq (Eq 8-10);
+- ``sliding``: the LuGre linearisation about a sliding speed v0, a first-order dynamic element;
+- ``free``: no contact force.
+
+References
+----------
+G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
+sec 3, 4.2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+
+from .drive import Drive, drive_blocks
+from .structure.model import ModalModel, signal_name
+
+__all__ = ["Contact", "build_plant", "loop_transfer", "CONTACT_KINDS", "UnstableLoopError"]
+
+CONTACT_KINDS = ("locked", "stiction", "viscous", "equivalent", "sliding", "free")
+WP_DOFS = ("wp.x", "wp.y", "wp.z")
+
+
+class UnstableLoopError(ValueError):
+    """A closed loop that is unstable where a stable one is required."""
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Linear model of the guide-way friction, as axis totals shared equally by the pads.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`CONTACT_KINDS`.
+    stiffness : float
+        Total contact stiffness [N/m] (stiction: sigma0; equivalent: Keq).
+    damping : float
+        Total contact damping [N s/m] (stiction: sigma1 + sigma2; viscous: C; equivalent: Ceq).
+    system : control.StateSpace, optional
+        For ``sliding``: the total contact as a SISO system from pad velocity [m/s] to friction
+        force [N] (e.g. the LuGre sliding linearisation).
+    note : str
+        Where the values came from (shown in reports).
+
+    Examples
+    --------
+    >>> Contact.viscous(4.912e5).damping
+    491200.0
+    """
+
+    kind: str
+    stiffness: float = 0.0
+    damping: float = 0.0
+    system: control.StateSpace | None = field(default=None, compare=False)
+    note: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in CONTACT_KINDS:
+            raise ValueError(f"Contact.kind must be one of {CONTACT_KINDS}, got {self.kind!r}")
+        for name in ("stiffness", "damping"):
+            value = float(getattr(self, name))
+            if not math.isfinite(value) or value < 0.0:
+                raise ValueError(f"Contact.{name} must be finite and >= 0, got {value!r}; a "
+                                 "negative value would make the guide way generate energy")
+            object.__setattr__(self, name, value)
+        if self.kind == "sliding":
+            if self.system is None:
+                raise ValueError("a sliding contact needs its linearised system (v -> F)")
+            sys = control.ss(self.system)
+            if sys.ninputs != 1 or sys.noutputs != 1:
+                raise ValueError("the sliding contact system must be SISO (velocity -> force)")
+            object.__setattr__(self, "system", sys)
+
+    @classmethod
+    def locked(cls) -> Contact:
+        """Pads held rigidly."""
+        return cls("locked", note="pads locked")
+
+    @classmethod
+    def free(cls) -> Contact:
+        """No friction at the pads."""
+        return cls("free", note="no friction")
+
+    @classmethod
+    def viscous(cls, c: float) -> Contact:
+        """Viscous damping C [N s/m] (axis total)."""
+        return cls("viscous", damping=c, note=f"viscous C = {c:.4g} N s/m")
+
+    @classmethod
+    def stiction(cls, sigma0: float, sigma1: float, sigma2: float) -> Contact:
+        """LuGre presliding linearisation: spring sigma0, damper sigma1 + sigma2 (axis totals)."""
+        return cls("stiction", stiffness=sigma0, damping=sigma1 + sigma2,
+                   note=f"stiction: sigma0 = {sigma0:.3g} N/m, sigma1 + sigma2 = "
+                        f"{sigma1 + sigma2:.3g} N s/m")
+
+    @classmethod
+    def equivalent(cls, ceq: float, keq: float = 0.0, amplitude: float | None = None) -> Contact:
+        """Describing-function contact: Ceq [N s/m] and Keq [N/m] (axis totals)."""
+        at = f" at A = {amplitude:.3g} m" if amplitude is not None else ""
+        return cls("equivalent", stiffness=keq, damping=ceq,
+                   note=f"describing function{at}: Ceq = {ceq:.3g} N s/m, Keq = {keq:.3g} N/m")
+
+    @classmethod
+    def sliding(cls, system, v0: float | None = None) -> Contact:
+        """Sliding linearisation: a SISO system from pad velocity to friction force (total)."""
+        at = f" at v0 = {v0:.3g} m/s" if v0 is not None else ""
+        return cls("sliding", system=system, note=f"sliding{at}")
+
+    def pad_block(self, pad: str, n_pads: int) -> control.StateSpace:
+        """One pad's share: inputs pad displacement and velocity, output the force on the pad
+        DOF (minus the friction force)."""
+        x, v, f = signal_name(pad), signal_name(pad, "v_"), signal_name(pad, "f_")
+        name = f"contact_{signal_name(pad)}"
+        if self.kind == "sliding":
+            share = control.ss(self.system) * (-1.0 / n_pads)
+            return control.ss(share.A, share.B, share.C, share.D, inputs=[v], outputs=[f],
+                              name=name)
+        gain = [[-self.stiffness / n_pads, -self.damping / n_pads]]
+        return control.ss([], [], [], gain, inputs=[x, v], outputs=[f], name=name)
+
+
+def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None, pads):
+    """The python-control blocks of the axis and the work-piece DOFs present."""
+    contact = Contact.free() if contact is None else contact
+    pads = list(pads)
+    structure.index(pads)  # clear error for unknown pad DOFs
+    if contact.kind != "free" and not pads:
+        raise ValueError(f"a {contact.kind!r} contact needs the pad DOFs (pads=...)")
+    if contact.kind == "locked":
+        structure = structure.locked(pads)
+    if contact.kind in ("locked", "free"):
+        pads = []
+    have = set(structure.dofs)
+    wp = [d for d in WP_DOFS if d in have]
+    motor, outputs_extra = [], []
+    if drive is not None:
+        motor = [d for d in (drive.motor.rotor, drive.motor.stator) if d is not None]
+        structure.index(motor)  # clear error for unknown motor DOFs
+        if drive.feedback == "linear" and drive.encoder not in wp + pads + motor:
+            structure.index(drive.encoder)
+            outputs_extra = [drive.encoder]
+    ports = wp + pads + motor
+    mech = structure.to_state_space(inputs=ports, outputs=ports + outputs_extra,
+                                    velocity_outputs=pads + motor, name="structure")
+    blocks = [mech] + [contact.pad_block(p, len(pads)) for p in pads]
+    if drive is not None:
+        blocks += drive_blocks(drive) + _motor_port(drive)
+    return blocks, wp
+
+
+def build_plant(structure: ModalModel, drive: Drive | None = None, contact: Contact | None = None,
+                pads=(), name: str = "axis") -> control.StateSpace:
+    """Interconnect structure, contacts and drive into the linearised axis.
+
+    Parameters
+    ----------
+    structure : ModalModel
+        The reduced structure (DOF names as in the module docstring).
+    drive : Drive, optional
+        The cascade. Without it the plant is the structure with its contacts (no control: the
+        paper's Fig 9 set-up).
+    contact : Contact, optional
+        Guide-way model (default: free).
+    pads : sequence of str
+        The pad DOFs (relative X at the guide-way pads) where the contact acts.
+
+    Returns
+    -------
+    control.StateSpace
+        With the named inputs and outputs of the module docstring.
+
+    Raises
+    ------
+    UnknownDofError
+        A pad, motor or encoder DOF the structure does not have.
+    ValueError
+        A contact other than ``free`` with no pads.
+    """
+    blocks, wp = _blocks(structure, drive, contact, pads)
+    plant_inputs = [signal_name(d, "f_") for d in wp]
+    plant_outputs = [signal_name(d) for d in wp]
+    if drive is not None:
+        plant_inputs = ["x_ref", "v_ref", "a_ref", *plant_inputs, "t_dist"]
+        plant_outputs += ["slide_x", "omega_motor", "following_error", "torque", "current"]
+    return control.interconnect(blocks, inplist=plant_inputs, outlist=plant_outputs,
+                                inputs=plant_inputs, outputs=plant_outputs, name=name,
+                                check_unused=False)
+
+
+def _motor_port(drive: Drive) -> list[control.StateSpace]:
+    """Torque onto the rotor/stator DOFs; encoder signals from them."""
+    rotor, stator = drive.motor.rotor, drive.motor.stator
+    grounded = stator is None
+    torque_out = [signal_name(rotor, "f_")] + ([] if grounded else [signal_name(stator, "f_")])
+    port = control.ss([], [], [], [[1.0, 1.0]] + ([] if grounded else [[-1.0, 0.0]]),
+                      inputs=["torque", "t_dist"], outputs=torque_out, name="motor_port")
+    speed_in = [signal_name(rotor, "v_")] + ([] if grounded else [signal_name(stator, "v_")])
+    angle_in = [signal_name(rotor)] + ([] if grounded else [signal_name(stator)])
+    rel = np.array([1.0] if grounded else [1.0, -1.0])
+    speeds = control.ss([], [], [], np.vstack([rel, rel, rel]), inputs=speed_in,
+                        outputs=["omega_fb", "omega_rel", "omega_motor"], name="motor_encoder")
+    if drive.feedback == "linear":
+        position = control.ss([], [], [], [[1.0], [1.0]], inputs=[signal_name(drive.encoder)],
+                              outputs=["x_fb", "slide_x"], name="linear_encoder")
+    else:
+        position = control.ss([], [], [], np.vstack([rel * drive.ratio] * 2), inputs=angle_in,
+                              outputs=["x_fb", "slide_x"], name="motor_position")
+    return [port, speeds, position]
+
+
+def loop_transfer(structure: ModalModel, drive: Drive, contact: Contact | None = None,
+                  pads=(), loop: str = "velocity") -> control.StateSpace:
+    """Loop transfer function L(s) of the velocity or position loop, opened at its feedback.
+
+    The loop is broken at the feedback signal (``omega_fb`` or ``x_fb``); L is minus the
+    response of the measured signal to an injection into the controller's feedback input, so
+    the closed loop is ``L/(1 + L)`` and the sensitivity ``1/(1 + L)``. The velocity loop is
+    opened with the position loop open too (as a drive commissioning tool measures it); the
+    position loop is opened with the velocity loop closed.
+
+    Returns
+    -------
+    control.StateSpace
+        SISO, input ``u`` (injected feedback), output ``y`` (minus the measured signal).
+    """
+    if loop not in ("velocity", "position"):
+        raise ValueError(f"loop must be 'velocity' or 'position', got {loop!r}")
+    blocks, _ = _blocks(structure, drive, contact, pads)
+    broken = {"velocity": ("omega_fb", "x_fb"), "position": ("x_fb",)}[loop]
+    for i, b in enumerate(blocks):  # rename the measured signals: their inputs become free
+        if any(s in broken for s in b.output_labels):
+            labels = [f"{s}_measured" if s in broken else s for s in b.output_labels]
+            blocks[i] = control.ss(b.A, b.B, b.C, b.D, inputs=b.input_labels, outputs=labels,
+                                   states=b.state_labels, name=b.name)
+    signal = broken[0]
+    open_loop = control.interconnect(blocks, inplist=[signal], outlist=[f"{signal}_measured"],
+                                     inputs=["u"], outputs=["y"], check_unused=False)
+    return control.ss(open_loop.A, open_loop.B, -open_loop.C, -open_loop.D, inputs=["u"],
+                      outputs=["y"], name=f"L_{loop}")

@@ -1,0 +1,98 @@
+"""``servotune friction`` and ``servotune friction fit``, called in-process."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from servotune.cli import main
+from servotune.friction import lugre
+from servotune.friction.lugre import BIANCHI2014
+
+
+def test_friction_json_has_the_equivalent_damping(tmp_path, capsys):
+    assert main(["friction", "--amplitude", "2e-6", "--frequency-hz", "20", "--json",
+                 "--out", str(tmp_path)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    w = 2 * math.pi * 20.0
+    a, fs, s0 = 2e-6, 6013.0, 5.9e9
+    # the corrected Eq 9 written out (Bianchi et al. 2014, sec 4.2, area 4 Fs (A - Fs/sigma0))
+    assert result["ceq_stiction"] == pytest.approx(4 * fs * (a - fs / s0) / (math.pi * w * a * a),
+                                                   rel=1e-12)
+    assert result["ceq_stiction_max"] == pytest.approx(s0 / (math.pi * w), rel=1e-12)
+    assert result["ceq_lugre"] > result["ceq_stiction"] > 0.0
+    assert 0.0 < result["keq_lugre"] < s0
+    assert [row["amplitude"] for row in result["table"]] == [1e-6, 2e-6, 5e-6]
+    for name in ("friction_stribeck.png", "friction_hysteresis.png",
+                 "friction_equivalent_damping.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_friction_text_output(tmp_path, capsys):
+    assert main(["friction", "--params", "canudas1995", "--no-plots", "--out",
+                 str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "canudas1995" in out and "Ceq" in out
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["friction", "--amplitude=-1e-6"], "--amplitude"),
+    (["friction", "--frequency-hz", "0"], "--frequency-hz"),
+])
+def test_friction_bad_input(argv, message, tmp_path, capsys):
+    assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 1
+    assert message in capsys.readouterr().err
+
+
+def write_csv(path, header, columns):
+    rows = "\n".join(",".join(f"{x:.12g}" for x in row) for row in zip(*columns, strict=True))
+    path.write_text(header + "\n" + rows + "\n")
+
+
+def test_fit_steady_state_from_csv(tmp_path, capsys):
+    rng = np.random.default_rng(42)
+    speeds = np.geomspace(2e-4, 0.5, 25)
+    v = np.concatenate([-speeds, speeds])
+    f = lugre.steady_state_friction(BIANCHI2014, v) + rng.normal(0.0, 60.0, v.size)
+    data = tmp_path / "stribeck.csv"
+    write_csv(data, "v_m_per_s,f_n", [v, f])
+    assert main(["friction", "fit", str(data), "--fix", "delta=1", "--json",
+                 "--out", str(tmp_path)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["fixed"] == {"delta": 1.0}
+    for name, value in result["estimates"].items():
+        assert abs(value - getattr(BIANCHI2014, name)) < 4 * result["standard_errors"][name]
+    assert (tmp_path / "fit_stribeck.png").stat().st_size > 10_000
+
+
+def test_fit_presliding_from_csv(tmp_path, capsys):
+    rng = np.random.default_rng(43)
+    t = np.linspace(0.0, 3.7, 600)
+    x = 10e-6 * np.sin(2 * math.pi * t / 3.7)
+    f = lugre.simulate_lugre(BIANCHI2014, t, displacement=x).force + rng.normal(0, 60, t.size)
+    data = tmp_path / "presliding.csv"
+    write_csv(data, "t_s,x_um,f_n", [t, x * 1e6, f])
+    assert main(["friction", "fit", str(data), "--no-plots", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "sigma0" in out and "sigma1" in out
+    assert main(["friction", "fit", str(data), "--json", "--out", str(tmp_path)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    s0, se = result["estimates"]["sigma0"], result["standard_errors"]["sigma0"]
+    assert abs(s0 - BIANCHI2014.sigma0) < 4 * se
+    assert (tmp_path / "fit_presliding.png").exists()
+
+
+def test_fit_refuses_unreadable_and_ill_posed_data(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("speed,torque\n1,2\n")
+    assert main(["friction", "fit", str(bad), "--no-plots"]) == 1
+    assert "v_m_per_s,f_n" in capsys.readouterr().err
+    one_sided = tmp_path / "one_sided.csv"
+    v = np.geomspace(1e-4, 0.5, 30)
+    write_csv(one_sided, "v_m_per_s,f_n", [v, lugre.steady_state_friction(BIANCHI2014, v)])
+    assert main(["friction", "fit", str(one_sided), "--no-plots"]) == 1
+    assert "one sign" in capsys.readouterr().err
+    assert main(["friction", "fit", str(one_sided), "--fix", "delta", "--no-plots"]) == 1
+    assert "NAME=VALUE" in capsys.readouterr().err

@@ -1,0 +1,103 @@
+"""Frequency responses and loop analysis against closed forms and python-control."""
+
+import math
+
+import control
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from servotune.frequency import (
+    analyse_loop,
+    closed_loop_poles,
+    fast_frequency_response,
+    peak,
+    require_stable,
+)
+from servotune.plant import UnstableLoopError
+
+
+def random_stable_system(n=40, p=3, m=2, seed=1):
+    """A seeded random stable system with a direct term."""
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal((n, n))
+    a = a - (np.max(np.linalg.eigvals(a).real) + 0.5) * np.eye(n)
+    return control.ss(a, rng.standard_normal((n, m)), rng.standard_normal((p, n)),
+                      rng.standard_normal((p, m)))
+
+
+def test_fast_response_equals_direct_evaluation():
+    sys = random_stable_system()
+    omega = np.geomspace(1e-2, 1e3, 500)
+    fast = fast_frequency_response(sys, omega).complex
+    direct = np.stack([sys(1j * w) for w in omega], axis=-1)
+    assert_allclose(fast, direct, rtol=1e-9, atol=1e-12 * np.abs(direct).max())
+
+
+def test_fast_response_falls_back_for_a_defective_matrix():
+    # a Jordan block: eigenvectors are parallel, so the modal formula is unusable
+    a = np.array([[-1.0, 1.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, -1.0]])
+    sys = control.ss(a, [[0.0], [0.0], [1.0]], [[1.0, 0.0, 0.0]], 0.0)
+    omega = np.linspace(0.0, 10.0, 50)
+    exact = 1.0 / (1j * omega + 1.0) ** 3
+    assert_allclose(fast_frequency_response(sys, omega).complex.ravel(), exact, rtol=1e-12)
+
+
+def test_phase_margin_and_ms_of_a_second_order_loop():
+    # L = k/(s (s + a)): |L| = 1 at wc^2 = (-a^2 + sqrt(a^4 + 4 k^2))/2,
+    # PM = 90 deg - atan(wc/a); |S| peak from a dense direct evaluation
+    k, a = 4.0, 1.0
+    loop = control.ss(control.tf([k], [1.0, a, 0.0]))
+    result = analyse_loop(loop, omega=np.geomspace(1e-3, 1e3, 20001))
+    wc = math.sqrt((-a**2 + math.sqrt(a**4 + 4 * k**2)) / 2)
+    assert result.crossover == pytest.approx(wc, rel=1e-6)
+    assert result.phase_margin_deg == pytest.approx(90.0 - math.degrees(math.atan(wc / a)),
+                                                    rel=1e-6)
+    assert math.isinf(result.gain_margin)
+    # |S|^2 = |s(s+a)|^2/|s^2 + a s + k|^2 peaks where its derivative vanishes; brute force
+    w = np.geomspace(1e-2, 1e2, 2_000_001)
+    s = 1j * w
+    assert result.ms == pytest.approx(np.abs(s * (s + a) / (s * s + a * s + k)).max(), rel=1e-7)
+
+
+def test_gain_margin_of_a_third_order_lag():
+    # L = k/(s+1)^3 crosses -180 deg at w = sqrt(3) where |L| = k/8: GM = 8/k
+    k = 2.0
+    result = analyse_loop(control.ss(control.tf([k], [1.0, 3.0, 3.0, 1.0])))
+    assert result.gain_margin == pytest.approx(8.0 / k, rel=1e-5)
+    assert result.phase_crossover == pytest.approx(math.sqrt(3.0), rel=1e-5)
+
+
+def test_bandwidth_of_a_first_order_closed_loop():
+    # L = wb/s gives T = wb/(s + wb): -3 dB at wb
+    result = analyse_loop(control.ss(control.tf([25.0], [1.0, 0.0])))
+    assert result.bandwidth == pytest.approx(25.0, rel=1e-5)
+
+
+def test_unstable_closed_loop_is_refused():
+    with pytest.raises(UnstableLoopError, match="right half plane"):
+        analyse_loop(control.ss(control.tf([20.0], [1.0, 3.0, 3.0, 1.0])))
+    with pytest.raises(UnstableLoopError):
+        require_stable(control.ss([[1.0]], [[1.0]], [[1.0]], 0.0))
+
+
+def test_poles_and_damping_ratios():
+    wn, zeta = 30.0, 0.05
+    sys = control.ss(control.tf([wn**2], [1.0, 2 * zeta * wn, wn**2]))
+    poles = closed_loop_poles(sys)
+    assert_allclose(poles.natural_frequencies, [wn, wn], rtol=1e-12)
+    assert poles.least_damped[1] == pytest.approx(zeta, rel=1e-12)
+    assert poles.stable
+
+
+def test_peak_refinement_finds_a_resonance_between_grid_points():
+    wn, zeta = 100.0, 0.02
+    omega = np.geomspace(10.0, 1000.0, 400)
+    h = 1.0 / (wn**2 - omega**2 + 2j * zeta * wn * omega)
+    value, where = peak(omega, h)
+    exact_w = wn * math.sqrt(1 - 2 * zeta**2)
+    exact = 1.0 / (2 * zeta * wn**2 * math.sqrt(1 - zeta**2))
+    # one mode: the parabola in (omega^2, 1/|H|^2) is exact
+    assert where == pytest.approx(exact_w, rel=1e-9)
+    assert value == pytest.approx(exact, rel=1e-9)
+    assert np.abs(h).max() < 0.995 * exact  # the grid alone misses it
