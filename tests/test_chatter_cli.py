@@ -72,6 +72,7 @@ def test_text_output_with_two_directions(capsys):
     (["lobes", *MODE, "--kt=-6e8"], "kt"),
     (["lobes", "--mode", "922", "1.5", "1e6"], "damping_ratio"),
     (["lobes", *MODE, "--speed-rpm", "9000", "5000"], "speed range"),
+    (["lobes", *MODE, "--speeds", "0"], "number of speeds"),
     (["lobes", "--frf", "missing.csv"], "missing.csv"),
 ])
 def test_bad_input_is_a_clear_error(argv, words, capsys, tmp_path):

@@ -88,7 +88,7 @@ def run(args) -> int:
     figure = args.out / f"lobes_{args.method}.png"
     files = [] if args.no_plots else [figure]
     report.check_writable(files, args.force)
-    count = args.speeds or (2000 if args.method == "zoa" else 200)
+    count = args.speeds if args.speeds is not None else (2000 if args.method == "zoa" else 200)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         speeds = chatter.spindle_speeds(system, setup, args.speed_rpm, count,
