@@ -49,6 +49,21 @@ from .friction.equivalent import (
     stiction_describing_function,
 )
 from .friction.identify import FrictionFit, fit_presliding, fit_steady_state
+# chatter: stability lobes (servotune.chatter)
+from .chatter import (
+    MillingSetup,
+    Mode,
+    StabilityLobes,
+    StabilityMap,
+    absolute_stability_limit,
+    chatter_margin,
+    critical_depth,
+    modal_compliance,
+    read_frf_csv,
+    sdm_lobes,
+    stability_lobes,
+    stability_map,
+)
 from .twomass import (
     TwoMassAnalysis,
     TwoMassSystem,
@@ -126,4 +141,17 @@ __all__ = [
     "FrictionFit",
     "fit_presliding",
     "fit_steady_state",
+    # chatter
+    "MillingSetup",
+    "Mode",
+    "StabilityLobes",
+    "StabilityMap",
+    "absolute_stability_limit",
+    "chatter_margin",
+    "critical_depth",
+    "modal_compliance",
+    "read_frf_csv",
+    "sdm_lobes",
+    "stability_lobes",
+    "stability_map",
 ]
