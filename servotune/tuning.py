@@ -159,8 +159,13 @@ class ChatterTarget:
 
     Examples
     --------
-    >>> ChatterTarget(kt=6e8, mu=0.5).b_crit(-1e-7)  # -1 / (2 * 6e8 * 0.5 * -1e-7)
-    0.016666666666666666
+    A single mode of stiffness k and damping zeta has min Re G = -1/(2 k zeta (1 + zeta)), so
+    Tlusty's b_crit = 2 k zeta (1 + zeta) / (Kt mu):
+
+    >>> k, zeta, target = 1e7, 0.02, ChatterTarget(kt=6e8, mu=0.5)
+    >>> b = target.b_crit(target.mu * -1.0 / (2 * k * zeta * (1 + zeta)))
+    >>> round(b / (2 * k * zeta * (1 + zeta) / (6e8 * 0.5)), 12)
+    1.0
     """
 
     kt: float
