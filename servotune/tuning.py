@@ -159,11 +159,11 @@ class ChatterTarget:
 
     Examples
     --------
-    A single mode of stiffness k and damping zeta has min Re G = -1/(2 k zeta (1 + zeta)), so
+    A single mode of stiffness k and damping zeta has min Re G = -1/(4 k zeta (1 + zeta)), so
     Tlusty's b_crit = 2 k zeta (1 + zeta) / (Kt mu):
 
     >>> k, zeta, target = 1e7, 0.02, ChatterTarget(kt=6e8, mu=0.5)
-    >>> b = target.b_crit(target.mu * -1.0 / (2 * k * zeta * (1 + zeta)))
+    >>> b = target.b_crit(target.mu * -1.0 / (4 * k * zeta * (1 + zeta)))
     >>> round(b / (2 * k * zeta * (1 + zeta) / (6e8 * 0.5)), 12)
     1.0
     """
