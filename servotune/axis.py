@@ -105,6 +105,18 @@ class Axis:
         return rotor
 
 
+    def configuration(self, pads: str = "free", motor: str = "free") -> ModalModel:
+        """The structure with the guide-way pads and/or the motor rotor held (``"locked"``)
+        or free (``"free"``): pads locked is stiction at standstill, the rotor held stands for
+        a stiff servo."""
+        for label, value in (("pads", pads), ("motor", motor)):
+            if value not in ("locked", "free"):
+                raise ValueError(f"{label} must be 'locked' or 'free', got {value!r}")
+        held = (list(self.pads) if pads == "locked" else []) + (
+            [self.motor_rotor] if motor == "locked" else [])
+        return self.structure.locked(held) if held else self.structure
+
+
 def _err(file, field, problem, fix):
     return AxisFormatError(f"{file}: {field}: {problem}; {fix}")
 

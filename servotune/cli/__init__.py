@@ -14,7 +14,7 @@ import sys
 __all__ = ["main", "build_parser"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("twomass",)
+COMMANDS = ("twomass", "modes", "check")
 
 
 def build_parser() -> argparse.ArgumentParser:

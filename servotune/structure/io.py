@@ -51,6 +51,7 @@ __all__ = [
     "read_dof_map",
     "read_structure",
     "read_harwell_boeing",
+    "read_coordinates",
     "write_npz",
 ]
 
@@ -433,3 +434,26 @@ def write_npz(path, mass, stiffness, dofs, force: bool = False) -> Path:
         raise
     return path
 
+
+
+def read_coordinates(path) -> dict[str, np.ndarray]:
+    """Node coordinates [m] from a CSV file with a header ``node,x,y,z`` (for the geometric
+    rigid-body motions of :func:`servotune.structure.cb_check`)."""
+    path = Path(path)
+    try:
+        with open(path, newline="") as handle:
+            rows = list(csv.DictReader(handle))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise MatrixFileError(f"{path}: cannot read the coordinates ({exc})") from None
+    if not rows or not {"node", "x", "y", "z"} <= {c.strip().lower() for c in rows[0]}:
+        raise MatrixFileError(f"{path}: coordinates need a header row node,x,y,z and one row "
+                              "per node")
+    out = {}
+    for r in rows:
+        r = {k.strip().lower(): v for k, v in r.items()}
+        try:
+            out[r["node"].strip()] = np.array([float(r[c]) for c in "xyz"])
+        except (TypeError, ValueError):
+            raise MatrixFileError(f"{path}: node {r.get('node')!r} has a coordinate that is "
+                                  "not a number") from None
+    return out
