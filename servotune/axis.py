@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
@@ -74,10 +74,10 @@ class Axis:
     description: str
     path: Path
     structure: ModalModel
-    friction: Mapping = MappingProxyType({})
-    drive: Mapping = MappingProxyType({})
-    cutting: Mapping = MappingProxyType({})
-    requirements: Mapping = MappingProxyType({})
+    friction: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    drive: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    cutting: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    requirements: Mapping = field(default_factory=lambda: MappingProxyType({}))
 
     @property
     def pads(self) -> tuple[str, ...]:

@@ -168,7 +168,8 @@ def _from_npz(path, name):
 def _from_mat(path, names):
     try:
         data = scipy.io.loadmat(path)
-    except (OSError, ValueError, NotImplementedError, TypeError) as exc:
+    except (OSError, ValueError, NotImplementedError, TypeError,
+            scipy.io.matlab.MatReadError) as exc:
         hint = " (MATLAB v7.3 files are HDF5: save with -v7)" if "7.3" in str(exc) \
             or "HDF" in str(exc) else ""
         raise MatrixFileError(f"{path}: cannot read as a MATLAB file ({exc}){hint}") from None
