@@ -333,7 +333,6 @@ def craig_bampton(mass, stiffness, boundary, n_modes=None, f_max_hz=None, dampin
         optional ``pypardiso`` package (``pip install 'servotune[fast]'``), much faster on 3D
         solid models of 1e5 DOFs and more. ``"auto"`` takes PARDISO when it is installed and
         K_ii has more than 5000 rows.
-
     Returns
     -------
     ModalModel
