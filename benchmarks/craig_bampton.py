@@ -274,7 +274,8 @@ def main(argv=None) -> dict:
         if "largest" in result:
             g = result["largest"]
             print(f"largest: {g['n_dof']} DOF in {g['time_reduce_s']:.1f} s, peak RSS "
-                  f"{g['peak_rss_gb']:.2f} GB; dense would need ~{g['dense_memory_gb_estimate']:.0f}"
+                  f"{g['peak_rss_gb']:.2f} GB; dense would need "
+                  f"~{g['dense_memory_gb_estimate']:.0f}"
                   f" GB and ~{g['dense_time_extrapolated_s']:.0f} s (extrapolated): "
                   f"{g['speedup_extrapolated']:.0f}x")
     return result

@@ -24,6 +24,7 @@ example with M1 = 5000 kg and M2 = 1500 kg suggests).
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 import sys
@@ -143,11 +144,11 @@ def build_full(cal: Calibration):
     ax, i_h, i_b, tor = _box(0.40, 0.35, 0.03)
     ay, j_h, j_b, tor_y = _box(0.40, 0.35, 0.03)
     beams = []
-    for j, y in enumerate(SLIDE_Y):
-        for x0, x1 in zip(SLIDE_X[:-1], SLIDE_X[1:], strict=True):
+    for _j, y in enumerate(SLIDE_Y):
+        for x0, x1 in itertools.pairwise(SLIDE_X):
             beams.append((grid[x0, y], grid[x1, y], ax, i_h, i_b, tor, x1 - x0))
     for x in SLIDE_X:
-        for y0, y1 in zip(SLIDE_Y[:-1], SLIDE_Y[1:], strict=True):
+        for y0, y1 in itertools.pairwise(SLIDE_Y):
             beams.append((grid[x, y0], grid[x, y1], ay, j_h, j_b, tor_y, y1 - y0))
     beam_mass = sum(b[2] * b[6] for b in beams) * CAST_IRON["rho"]
     rho_slide = CAST_IRON["rho"] * cal.slide_mass / beam_mass  # ribs, table top, way covers
@@ -265,7 +266,7 @@ AXIS_TOML = """\
 
 [axis]
 name = "paper_x_axis"
-description = "Representative (not the real machine) model of the X axis of Bianchi et al., Procedia CIRP 21 (2014): Craig-Bampton, 41 DOFs"
+description = "Representative model (not the real machine) of the X axis of Bianchi (2014)"
 
 [structure]
 file = "structure.npz"

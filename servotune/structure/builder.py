@@ -17,10 +17,12 @@ J. S. Przemieniecki, Theory of Matrix Structural Analysis, McGraw-Hill (1968), c
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import scipy.sparse
 
-__all__ = ["StructureBuilder", "NODE_DOFS"]
+__all__ = ["NODE_DOFS", "StructureBuilder"]
 
 NODE_DOFS = ("x", "y", "z", "rx", "ry", "rz")
 
@@ -161,7 +163,7 @@ class StructureBuilder:
         names.append(node2)
         kl, ml = _beam_local(e, g, area, iy, iz, torsion, rho, length / n_elements)
         kg, mg = t.T @ kl @ t, t.T @ ml @ t
-        for a, b in zip(names[:-1], names[1:], strict=True):
+        for a, b in itertools.pairwise(names):
             idx = np.concatenate([self._node_indices(a), self._node_indices(b)])
             self._k.append((idx, kg))
             self._m.append((idx, mg))

@@ -47,11 +47,11 @@ from .model import ModalModel, UnknownDofError
 __all__ = [
     "MatrixFileError",
     "StructureMatrices",
-    "read_matrix",
-    "read_dof_map",
-    "read_structure",
-    "read_harwell_boeing",
     "read_coordinates",
+    "read_dof_map",
+    "read_harwell_boeing",
+    "read_matrix",
+    "read_structure",
     "write_npz",
 ]
 

@@ -48,9 +48,9 @@ from .model import ModalModel
 __all__ = [
     "CraigBamptonBasis",
     "CraigBamptonCheck",
+    "cb_check",
     "craig_bampton",
     "craig_bampton_basis",
-    "cb_check",
     "rigid_body_vectors",
 ]
 
