@@ -177,6 +177,7 @@ def run_case(n_target: int, method: str) -> dict:
     u = np.tile([1.0, 0.0, 0.0], m.shape[0] // 3)  # rigid translation in X: u^T M u = rho V
     mass_check = float(u @ (m @ u))
     return {"n_dof": int(m.shape[0]), "nnz": int(k.nnz), "method": method, "solver": solver,
+            "load_average_1min": os.getloadavg()[0],
             "n_reduced": int(mr.shape[0]), "time_model_s": t_model, "time_reduce_s": t_reduce,
             "peak_rss_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6,
             "rss_after_model_gb": rss_model,
@@ -233,7 +234,8 @@ def main(argv=None) -> dict:
                           f"{row['time_reduce_s']:8.2f} s  peak RSS {row['peak_rss_gb']:5.2f} GB"
                           f"  (model {row['time_model_s']:.1f} s)", flush=True)
     ok = [r for r in rows if "error" not in r]
-    result = {"n_modes": N_MODES, "n_boundary": 15, "cores": os.cpu_count(), "cases": rows}
+    result = {"n_modes": N_MODES, "n_boundary": 15, "cores": os.cpu_count(),
+              "load_average_1min_at_end": os.getloadavg()[0], "cases": rows}
     speedups = []
     for r in ok:
         if r["method"] != "dense":

@@ -231,8 +231,11 @@ def _fixed_interface_modes(k_ii, m_ii, lu, n_modes, f_max_hz):
         if k >= n_i - 1 or n_i <= 200:  # small interiors: dense, exact
             return _dense_lowest_modes(k_ii.toarray(), m_ii.toarray(), k)
         # In shift-invert mode eigsh uses A only for its shape; OPinv applies K_ii^-1.
+        # tol = 1e-8 on the Ritz values of K_ii^-1 M_ii: the eigenvector error is then
+        # ~1e-8 and the eigenvalues, Rayleigh quotients, are exact to ~1e-15; it saves about
+        # a sixth of the solves of tol = 0 (machine precision).
         w2, phi = scipy.sparse.linalg.eigsh(k_ii, k=k, M=m_ii, sigma=0.0, which="LM",
-                                            OPinv=op_inv, v0=np.ones(n_i))
+                                            OPinv=op_inv, v0=np.ones(n_i), tol=1e-8)
         order = np.argsort(w2)
         return w2[order], phi[:, order]
 
@@ -346,9 +349,10 @@ def craig_bampton(mass, stiffness, boundary, n_modes=None, f_max_hz=None, dampin
 
     Notes
     -----
-    One sparse LU factorisation of K_ii (SuperLU, symmetric ordering) gives the constraint modes
-    Psi = -K_ii^-1 K_ib and serves as the shift-invert operator of the Lanczos eigen-solution
-    (``scipy.sparse.linalg.eigsh``, sigma = 0) for the fixed-interface modes. With a cut-off
+    One sparse factorisation of K_ii (SuperLU with a symmetric ordering and no pivoting, or a
+    PARDISO Cholesky) gives the constraint modes Psi = -K_ii^-1 K_ib and serves as the
+    shift-invert operator of the Lanczos eigen-solution (``scipy.sparse.linalg.eigsh``,
+    sigma = 0) for the fixed-interface modes. With a cut-off
     frequency the number of modes is doubled from 20 until the cut-off is passed. The reduced
     matrices are given in the module docstring (Craig and Bampton 1968).
 
