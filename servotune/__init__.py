@@ -64,6 +64,18 @@ from .chatter import (
     stability_lobes,
     stability_map,
 )
+
+# structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
+from .axis import Axis, AxisFormatError, load_axis
+from .structure import (
+    CraigBamptonCheck,
+    MatrixFileError,
+    StructureBuilder,
+    cb_check,
+    craig_bampton,
+    read_structure,
+    write_npz,
+)
 from .twomass import (
     TwoMassAnalysis,
     TwoMassSystem,
@@ -108,6 +120,17 @@ __all__ = [
     # structure
     "ModalModel",
     "UnknownDofError",
+    # structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
+    "craig_bampton",
+    "cb_check",
+    "CraigBamptonCheck",
+    "read_structure",
+    "write_npz",
+    "MatrixFileError",
+    "StructureBuilder",
+    "Axis",
+    "AxisFormatError",
+    "load_axis",
     # twomass
     "TwoMassSystem",
     "TwoMassAnalysis",
