@@ -25,7 +25,8 @@ from .frequency import (
     modal_receptance,
     port_compliance,
 )
-from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
+from .plant import Contact, GuideWayFriction, UnstableLoopError, build_plant, loop_transfer
+from .requirements import Requirements
 from .structure import ModalModel, UnknownDofError
 from .friction import (
     BIANCHI2014,
@@ -66,7 +67,7 @@ from .chatter import (
 )
 
 # structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
-from .axis import Axis, AxisFormatError, load_axis
+from .axis import Axis, AxisFormatError, Cutting, load_axis
 from .structure import (
     CraigBamptonCheck,
     MatrixFileError,
@@ -104,6 +105,8 @@ __all__ = [
     "kv_to_m_per_min_per_mm",
     # plant
     "Contact",
+    "GuideWayFriction",
+    "Requirements",
     "UnstableLoopError",
     "build_plant",
     "loop_transfer",
@@ -130,6 +133,7 @@ __all__ = [
     "StructureBuilder",
     "Axis",
     "AxisFormatError",
+    "Cutting",
     "load_axis",
     # twomass
     "TwoMassSystem",

@@ -1,10 +1,13 @@
 """Axis descriptions: a folder with ``axis.toml`` and the matrix files it names.
 
-:func:`load_axis` reads the description into an :class:`Axis`: the structure as a
-:class:`~servotune.structure.ModalModel` (built from the ``[structure]`` table) and the other
-tables (``[friction]``, ``[drive]``, ``[cutting]``, ``[requirements]``) kept as read-only
-mappings for the modules that interpret them. Values are SI unless the key says otherwise
-(``_hz``, ``_deg``, ``_db``, ``_rpm``, ``kv_m_per_min_per_mm``).
+:func:`load_axis` reads the description into an :class:`Axis` of validated objects: the
+structure as a :class:`~servotune.structure.ModalModel` (``[structure]``), the guide-way friction
+as a :class:`~servotune.plant.GuideWayFriction` (``[friction]``), the cascade as a
+:class:`~servotune.drive.Drive` (``[drive]``), the milling set-up as :class:`Cutting`
+(``[cutting]``) and the :class:`~servotune.requirements.Requirements` (``[requirements]``).
+Values are SI unless the key says otherwise (``_hz``, ``_deg``, ``_db``, ``_rpm``,
+``kv_m_per_min_per_mm``). The raw tables stay available as read-only mappings under
+``Axis.tables``.
 
 ``[structure]`` takes either a reduced model in one ``.npz`` file::
 
@@ -25,17 +28,31 @@ Every error names the file, the field and what to do about it.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
+from .chatter.setup import MillingSetup
+from .drive import (
+    Drive,
+    LowPassFilter,
+    Motor,
+    NotchFilter,
+    PIController,
+    kv_from_m_per_min_per_mm,
+)
+from .friction.identify import fit_steady_state, read_friction_csv
+from .friction.lugre import LuGreParameters
+from .plant import GuideWayFriction
+from .requirements import Requirements
 from .structure.io import MatrixFileError, read_structure
 from .structure.model import ModalModel, UnknownDofError
 from .structure.reduction import craig_bampton
 
-__all__ = ["Axis", "AxisFormatError", "load_axis"]
+__all__ = ["Axis", "AxisFormatError", "Cutting", "load_axis"]
 
 SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "requirements")
 _STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce"}
@@ -55,6 +72,15 @@ def _frozen(value):
     return value
 
 
+@dataclass(frozen=True)
+class Cutting:
+    """The milling set-up of an axis and the spindle-speed range of interest [rpm]."""
+
+    setup: MillingSetup
+    speed_rpm: tuple[float, float] = (1000.0, 12000.0)
+    direction: str = "x"
+
+
 @dataclass(frozen=True, eq=False)
 class Axis:
     """A feed axis as described in ``axis.toml``.
@@ -66,18 +92,28 @@ class Axis:
         The folder of the description (data files are relative to it).
     structure : ModalModel
         The structural model with named DOFs and its distributed damping.
-    friction, drive, cutting, requirements : Mapping
-        The tables of the same name, read-only (empty when absent).
+    friction : GuideWayFriction or None
+    drive : Drive or None
+    cutting : Cutting or None
+    requirements : Requirements
+        Defaults when the table is absent.
+    tables : Mapping
+        The raw TOML tables, read-only.
     """
 
     name: str
     description: str
     path: Path
     structure: ModalModel
-    friction: Mapping = field(default_factory=lambda: MappingProxyType({}))
-    drive: Mapping = field(default_factory=lambda: MappingProxyType({}))
-    cutting: Mapping = field(default_factory=lambda: MappingProxyType({}))
-    requirements: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    friction: GuideWayFriction | None = None
+    drive: Drive | None = None
+    cutting: Cutting | None = None
+    requirements: Requirements = field(default_factory=Requirements)
+    tables: Mapping = field(default_factory=lambda: MappingProxyType({}))
+
+    @property
+    def file(self) -> Path:
+        return self.path / "axis.toml"
 
     @property
     def pads(self) -> tuple[str, ...]:
@@ -86,24 +122,34 @@ class Axis:
         Raises
         ------
         AxisFormatError
-            If the description has no ``[friction]`` ``pads``.
+            If the description has no ``[friction]``.
         """
-        pads = self.friction.get("pads")
-        if not pads:
-            raise AxisFormatError(f"{self.path / 'axis.toml'}: [friction] pads is missing; add "
+        if self.friction is None:
+            raise AxisFormatError(f"{self.file}: [friction] is missing; add it with "
                                   'pads = ["pad1.x", ...] (the relative-X DOFs of the guide-way '
-                                  "pads)")
-        return tuple(pads)
+                                  'pads) and lugre = "bianchi2014" or a parameter table')
+        return self.friction.pads
 
     @property
     def motor_rotor(self) -> str:
         """The motor rotor DOF of ``[drive.motor]``."""
-        rotor = self.drive.get("motor", {}).get("rotor")
-        if not rotor:
-            raise AxisFormatError(f"{self.path / 'axis.toml'}: [drive.motor] rotor is missing; "
-                                  'add rotor = "motor.rotor" (the rotor rotation DOF)')
-        return rotor
+        return self.require_drive().motor.rotor
 
+    def require_drive(self) -> Drive:
+        """The drive, or a clear error naming the missing table."""
+        if self.drive is None:
+            raise AxisFormatError(f"{self.file}: [drive] is missing; add [drive.motor], "
+                                  "[drive.transmission], [drive.current_loop], "
+                                  "[drive.velocity_loop] and [drive.position_loop] (see "
+                                  "`servotune init`)")
+        return self.drive
+
+    def require_cutting(self) -> Cutting:
+        """The milling set-up, or a clear error naming the missing table."""
+        if self.cutting is None:
+            raise AxisFormatError(f"{self.file}: [cutting] is missing; add teeth, kt, kn, "
+                                  "radial_immersion, milling and speed_rpm (see `servotune init`)")
+        return self.cutting
 
     def configuration(self, pads: str = "free", motor: str = "free") -> ModalModel:
         """The structure with the guide-way pads and/or the motor rotor held (``"locked"``)
@@ -180,6 +226,183 @@ def _check_dofs(model: ModalModel, names, file, field):
         raise _err(file, field, str(exc), "name DOFs of the structure") from None
 
 
+def _table(data, name, file, required=(), optional=()):
+    """A sub-table with only known keys, the required ones present."""
+    table = data.get(name)
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise _err(file, f"[{name}]", f"got {table!r}", f"make [{name}] a table")
+    unknown = set(table) - set(required) - set(optional)
+    if unknown:
+        raise _err(file, f"[{name}]", f"unknown keys {sorted(unknown)}",
+                   f"use {sorted(set(required) | set(optional))} (check the spelling)")
+    missing = [k for k in required if k not in table]
+    if missing:
+        raise _err(file, f"[{name}]", f"missing {missing}", "add them (see `servotune init`)")
+    return table
+
+
+def _number(table, key, file, section, default=None, positive=True):
+    value = table.get(key, default)
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _err(file, f"[{section}] {key}", f"got {value!r}", "give a number in SI units")
+    if positive and not value > 0:
+        raise _err(file, f"[{section}] {key}", f"got {value!r}", "give a positive value")
+    return float(value)
+
+
+def _friction(data, structure, folder, file) -> GuideWayFriction | None:
+    table = _table(data, "friction", file, ("pads",), ("lugre", "viscous", "measurements"))
+    if table is None:
+        return None
+    pads = table["pads"]
+    if not isinstance(pads, list) or not pads or not all(isinstance(p, str) for p in pads):
+        raise _err(file, "[friction] pads", f"got {pads!r}",
+                   'give a list of pad DOF names, e.g. ["pad1.x", "pad2.x"]')
+    _check_dofs(structure, pads, file, "[friction] pads")
+    lugre = table.get("lugre", "bianchi2014")
+    try:
+        if isinstance(lugre, str):
+            params = LuGreParameters.named(lugre)
+        elif isinstance(lugre, dict):
+            params = LuGreParameters(**lugre)
+        else:
+            raise ValueError(f"got {lugre!r}")
+    except (TypeError, ValueError, KeyError) as exc:
+        raise _err(file, "[friction] lugre", str(exc),
+                   f"give a named set {LuGreParameters.names()} or a table "
+                   "{fc, fs, vs, delta, sigma0, sigma1, sigma2} in SI units") from None
+    measurements = table.get("measurements")
+    if measurements is not None:
+        if not isinstance(measurements, dict) or set(measurements) - {"stribeck"}:
+            raise _err(file, "[friction] measurements", f"got {measurements!r}",
+                       'give measurements = { stribeck = "stribeck.csv" } (columns v_m_per_s, '
+                       "f_n)")
+        csv = folder / str(measurements["stribeck"])
+        try:
+            measured = read_friction_csv(csv)
+            if measured.kind != "steady_state":
+                raise ValueError("the file holds no velocity column (v_m_per_s)")
+            params = fit_steady_state(measured.velocity, measured.force, base=params).parameters
+        except (OSError, ValueError) as exc:
+            raise _err(file, "[friction] measurements.stribeck", str(exc),
+                       "give a CSV of sliding friction over both velocity signs") from None
+    try:
+        return GuideWayFriction(tuple(pads), params,
+                                _number(table, "viscous", file, "friction", positive=False))
+    except ValueError as exc:
+        raise _err(file, "[friction]", str(exc), "fix the values") from None
+
+
+_MOTOR_KEYS = ("torque_constant", "back_emf_constant", "resistance", "inductance")
+
+
+def _drive(data, structure, file) -> Drive | None:
+    table = _table(data, "drive", file, ("motor", "transmission", "current_loop",
+                                         "velocity_loop", "position_loop"),
+                   ("encoder", "feedforward", "filters"))
+    if table is None:
+        return None
+    motor = _table(table, "motor", file, _MOTOR_KEYS,
+                   ("rotor", "stator", "rotor_inertia", "torque_max", "speed_max_rpm"))
+    trans = _table(table, "transmission", file, ("ratio",), ("lead", "belt_ratio"))
+    current = _table(table, "current_loop", file, ("kp", "ti"))
+    velocity = _table(table, "velocity_loop", file, ("kp", "ti"))
+    position = _table(table, "position_loop", file, (), ("kv", "kv_m_per_min_per_mm"))
+    feedforward = _table(table, "feedforward", file, (), ("velocity", "torque_inertia")) or {}
+    filters = _table(table, "filters", file, (), ("lowpass_hz", "notch_hz", "notch_width",
+                                                   "notch_depth")) or {}
+    encoder = table.get("encoder", "linear")
+    if encoder not in ("linear", "motor"):
+        raise _err(file, "[drive] encoder", f"got {encoder!r}", 'give "linear" or "motor"')
+    if ("kv" in position) == ("kv_m_per_min_per_mm" in position):
+        raise _err(file, "[drive.position_loop]", "give exactly one of kv [1/s] and "
+                   "kv_m_per_min_per_mm", "e.g. kv_m_per_min_per_mm = 1.0 (the paper's Kv)")
+    kv = (_number(position, "kv", file, "drive.position_loop") if "kv" in position else
+          kv_from_m_per_min_per_mm(_number(position, "kv_m_per_min_per_mm", file,
+                                            "drive.position_loop")))
+    for name in ("rotor", "stator"):
+        if name in motor:
+            _check_dofs(structure, [motor[name]], file, f"[drive.motor] {name}")
+    if encoder == "linear":
+        _check_dofs(structure, ["encoder.x"], file, "[drive] encoder = 'linear'")
+    try:
+        lowpass = (LowPassFilter(filters["lowpass_hz"]) if "lowpass_hz" in filters else None)
+        notch = (NotchFilter(filters["notch_hz"], filters.get("notch_width", 0.5),
+                             filters.get("notch_depth", 0.1)) if "notch_hz" in filters else None)
+        return Drive(
+            motor=Motor(*(_number(motor, k, file, "drive.motor") for k in _MOTOR_KEYS),
+                        rotor=motor.get("rotor", "motor.rotor"),
+                        stator=motor.get("stator", "motor.stator")),
+            ratio=_number(trans, "ratio", file, "drive.transmission"),
+            current_loop=PIController(_number(current, "kp", file, "drive.current_loop"),
+                                      _number(current, "ti", file, "drive.current_loop")),
+            velocity_loop=PIController(_number(velocity, "kp", file, "drive.velocity_loop"),
+                                       _number(velocity, "ti", file, "drive.velocity_loop")),
+            kv=kv, feedback=encoder,
+            velocity_feedforward=_number(feedforward, "velocity", file, "drive.feedforward", 0.0,
+                                         positive=False),
+            torque_feedforward_inertia=_number(feedforward, "torque_inertia", file,
+                                               "drive.feedforward", 0.0, positive=False),
+            lowpass=lowpass, notch=notch)
+    except ValueError as exc:
+        raise _err(file, "[drive]", str(exc), "fix the value") from None
+
+
+def _cutting(data, file) -> Cutting | None:
+    table = _table(data, "cutting", file, ("teeth", "kt", "kn"),
+                   ("radial_immersion", "milling", "speed_rpm", "direction", "helix_angle"))
+    if table is None:
+        return None
+    speeds = table.get("speed_rpm", [1000.0, 12000.0])
+    if (not isinstance(speeds, list) or len(speeds) != 2 or
+            not all(isinstance(v, (int, float)) for v in speeds) or not 0 < speeds[0] < speeds[1]):
+        raise _err(file, "[cutting] speed_rpm", f"got {speeds!r}",
+                   "give [low, high] spindle speeds in rpm with 0 < low < high")
+    direction = table.get("direction", "x")
+    if direction not in ("x", "y"):
+        raise _err(file, "[cutting] direction", f"got {direction!r}", 'give "x" or "y"')
+    try:
+        setup = MillingSetup(teeth=table["teeth"], kt=table["kt"], kn=table["kn"],
+                             radial_immersion=table.get("radial_immersion", 1.0),
+                             milling=table.get("milling", "down"),
+                             helix_angle=table.get("helix_angle", 0.0))
+    except (TypeError, ValueError) as exc:
+        raise _err(file, "[cutting]", str(exc), "fix the value (kt, kn in N/m^2)") from None
+    return Cutting(setup, (float(speeds[0]), float(speeds[1])), direction)
+
+
+def _requirements(data, file) -> Requirements:
+    keys = ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg", "gain_margin_min_db",
+            "kv_min", "kv_min_m_per_min_per_mm", "band_hz", "loop_band_hz", "depth_required")
+    table = _table(data, "requirements", file, (), keys)
+    if table is None:
+        return Requirements()
+    kwargs = {}
+    for key in ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg",
+                "gain_margin_min_db", "kv_min", "depth_required"):
+        if key in table:
+            kwargs[key] = _number(table, key, file, "requirements", positive=False)
+    if "kv_min_m_per_min_per_mm" in table:
+        kwargs["kv_min"] = kv_from_m_per_min_per_mm(
+            _number(table, "kv_min_m_per_min_per_mm", file, "requirements", positive=False))
+    for key, name in (("band_hz", "band"), ("loop_band_hz", "loop_band")):
+        if key in table:
+            band = table[key]
+            if (not isinstance(band, list) or len(band) != 2
+                    or not all(isinstance(v, (int, float)) for v in band)):
+                raise _err(file, f"[requirements] {key}", f"got {band!r}",
+                           "give [low, high] in Hz")
+            kwargs[name] = (2 * math.pi * band[0], 2 * math.pi * band[1])
+    try:
+        return Requirements(**kwargs)
+    except ValueError as exc:
+        raise _err(file, "[requirements]", str(exc), "fix the value") from None
+
+
 def load_axis(path) -> Axis:
     """Load an axis description.
 
@@ -219,20 +442,8 @@ def load_axis(path) -> Axis:
         raise _err(file, "[axis] name", "missing", 'add name = "my_axis"')
     folder = file.parent
     structure = _structure(data["structure"], folder, file)
-    friction = data.get("friction", {})
-    if "pads" in friction:
-        if not isinstance(friction["pads"], list) or not friction["pads"]:
-            raise _err(file, "[friction] pads", f"got {friction['pads']!r}",
-                       'give a list of pad DOF names, e.g. ["pad1.x", "pad2.x"]')
-        _check_dofs(structure, friction["pads"], file, "[friction] pads")
-    motor = data.get("drive", {}).get("motor", {})
-    for key in ("rotor", "stator"):
-        if key in motor:
-            _check_dofs(structure, [motor[key]], file, f"[drive.motor] {key}")
-    if data.get("drive", {}).get("encoder") == "linear":
-        _check_dofs(structure, ["encoder.x"], file, "[drive] encoder = 'linear'")
     return Axis(name=name, description=str(data["axis"].get("description", "")),
                 path=folder.resolve(), structure=structure,
-                friction=_frozen(friction), drive=_frozen(data.get("drive", {})),
-                cutting=_frozen(data.get("cutting", {})),
-                requirements=_frozen(data.get("requirements", {})))
+                friction=_friction(data, structure, folder, file),
+                drive=_drive(data, structure, file), cutting=_cutting(data, file),
+                requirements=_requirements(data, file), tables=_frozen(data))

@@ -44,9 +44,12 @@ import control
 import numpy as np
 
 from .drive import Drive, drive_blocks
+from .friction.equivalent import describing_function
+from .friction.lugre import LuGreParameters, sliding_linearisation
 from .structure.model import ModalModel, signal_name
 
-__all__ = ["Contact", "build_plant", "loop_transfer", "CONTACT_KINDS", "UnstableLoopError"]
+__all__ = ["Contact", "GuideWayFriction", "build_plant", "loop_transfer", "CONTACT_KINDS",
+           "UnstableLoopError"]
 
 CONTACT_KINDS = ("locked", "stiction", "viscous", "equivalent", "sliding", "free")
 WP_DOFS = ("wp.x", "wp.y", "wp.z")
@@ -149,6 +152,70 @@ class Contact:
                               name=name)
         gain = [[-self.stiffness / n_pads, -self.damping / n_pads]]
         return control.ss([], [], [], gain, inputs=[x, v], outputs=[f], name=name)
+
+
+@dataclass(frozen=True)
+class GuideWayFriction:
+    """The friction of an axis, lumped at its guide-way pads (paper, sec 3).
+
+    Parameters
+    ----------
+    pads : tuple of str
+        Relative-X DOFs of the pads; the friction is shared equally among them.
+    lugre : LuGreParameters
+        Axis-total LuGre parameters.
+    viscous : float
+        Axis-total damping of the viscous-only model [N s/m] (default: sigma2).
+    """
+
+    pads: tuple[str, ...]
+    lugre: LuGreParameters
+    viscous: float | None = None
+
+    def __post_init__(self) -> None:
+        pads = tuple(self.pads)
+        if not pads or len(set(pads)) != len(pads):
+            raise ValueError(f"GuideWayFriction.pads must be distinct DOF names, got {pads!r}")
+        object.__setattr__(self, "pads", pads)
+        viscous = self.lugre.sigma2 if self.viscous is None else float(self.viscous)
+        if not (viscous >= 0 and math.isfinite(viscous)):
+            raise ValueError(f"GuideWayFriction.viscous must be finite and >= 0 N s/m, got "
+                             f"{self.viscous!r}")
+        object.__setattr__(self, "viscous", viscous)
+
+    @property
+    def per_pad(self) -> LuGreParameters:
+        """One pad's share of the LuGre parameters."""
+        return self.lugre.scaled(1.0 / len(self.pads))
+
+    def contact(self, kind: str, amplitude: float | None = None, omega: float | None = None,
+                v0: float | None = None) -> Contact:
+        """The linear contact model of a kind (see :data:`CONTACT_KINDS`).
+
+        ``stiction`` uses sigma0 and sigma1 + sigma2; ``viscous`` the viscous-only damping;
+        ``equivalent`` the LuGre describing function at a vibration ``amplitude`` [m] and
+        ``omega`` [rad/s] (Ceq and Keq); ``sliding`` the LuGre linearisation at speed ``v0``.
+        """
+        p = self.lugre
+        if kind == "locked":
+            return Contact.locked()
+        if kind == "free":
+            return Contact.free()
+        if kind == "stiction":
+            return Contact.stiction(p.sigma0, p.sigma1, p.sigma2)
+        if kind == "viscous":
+            return Contact.viscous(self.viscous)
+        if kind == "equivalent":
+            if amplitude is None or omega is None:
+                raise ValueError("the describing-function contact needs amplitude [m] and "
+                                 "omega [rad/s]")
+            ceq, keq = describing_function(p, amplitude, omega)
+            return Contact.equivalent(float(ceq), max(float(keq), 0.0), amplitude)
+        if kind == "sliding":
+            if v0 is None or v0 == 0:
+                raise ValueError("the sliding contact needs a non-zero speed v0 [m/s]")
+            return Contact.sliding(sliding_linearisation(p, v0), v0)
+        raise ValueError(f"contact kind must be one of {CONTACT_KINDS}, got {kind!r}")
 
 
 def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None, pads):

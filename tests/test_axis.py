@@ -27,19 +27,22 @@ def test_two_mass_axis_is_the_papers_fig5_system():
     locked = axis.configuration(pads="locked")
     assert_allclose(locked.natural_frequencies(), [math.sqrt(k / m2)])
     assert_allclose(s.damping, 0.0, atol=0)  # the only damping is the guide-way C
-    assert axis.friction["viscous"] == 4.912e5 and axis.pads == ("pad1.x",)
+    assert axis.friction.viscous == 4.912e5 and axis.pads == ("pad1.x",)
 
 
-def test_paper_axis_tables_are_read_only():
+def test_paper_axis_sections_are_typed_and_read_only():
     axis = load_axis(MODELS / "paper_x_axis" / "axis.toml")
     assert axis.path == (MODELS / "paper_x_axis").resolve()
     assert axis.structure.n == 41
-    assert axis.friction["pads"] == ("pad1.x", "pad2.x", "pad3.x", "pad4.x")
-    assert axis.drive["motor"]["rotor"] == "motor.rotor"
+    assert axis.friction.pads == ("pad1.x", "pad2.x", "pad3.x", "pad4.x")
+    assert axis.friction.lugre.fs == 6013.0  # the paper's identified set (table after Fig 8)
+    assert axis.drive.motor.rotor == "motor.rotor"
+    # the paper's Kv = 1 (m/min)/mm
+    assert_allclose(axis.drive.kv_m_per_min_per_mm, 1.0)
+    assert_allclose(axis.requirements.band, (2 * math.pi * 5.0, 2 * math.pi * 300.0))
+    assert axis.cutting.setup.teeth == 4
     with pytest.raises(TypeError):
-        axis.drive["motor"]["torque_constant"] = 3.0
-    with pytest.raises(TypeError):
-        axis.requirements["band_hz"] = (1.0, 2.0)
+        axis.tables["drive"]["motor"]["torque_constant"] = 3.0
     assert axis.motor_rotor == "motor.rotor"
 
 
@@ -70,7 +73,7 @@ def test_fe_matrices_are_reduced_on_loading(tmp_path):
     w1 = s.natural_frequencies()[0]
     assert exact <= w1 < exact * 1.001
     assert_allclose(s.modal_damping_ratios(), 0.02, rtol=1e-9)
-    assert axis.cutting == {} and axis.friction["viscous"] == 100.0
+    assert axis.cutting is None and axis.drive is None and axis.friction.viscous == 100.0
 
 
 @pytest.mark.parametrize("toml, message", [
@@ -86,7 +89,16 @@ def test_fe_matrices_are_reduced_on_loading(tmp_path):
     ('[axis]\nname = "x"\n[structure]\nfile = "s.npz"\nmodal_damping = "3%"\n',
      "modal_damping"),
     ('[axis]\nname = "x"\n[structure]\nfile = "s.npz"\n[drive]\nencoder = "linear"\n',
-     "encoder.x"),
+     r"\[drive\]: missing \['motor', 'transmission'"),
+    ('[axis]\nname = "x"\n[structure]\nfile = "s.npz"\n[friction]\npads = ["pad1.x"]\n'
+     'lugre = { fc = 3000.0, fs = 2000.0, vs = 0.01, delta = 1.0, sigma0 = 1e9, sigma1 = 1e6, '
+     'sigma2 = 100.0 }\n', r"\[friction\] lugre.*fc"),
+    ('[axis]\nname = "x"\n[structure]\nfile = "s.npz"\n[cutting]\nteeth = 4\nkt = 2e9\n'
+     'kn = 6e8\nradial_immersion = 1.5\n', r"\[cutting\].*immersion"),
+    ('[axis]\nname = "x"\n[structure]\nfile = "s.npz"\n[requirements]\nms_velocity_max = 0.8\n',
+     r"\[requirements\].*ms_velocity_max"),
+    ('[axis]\nname = "x"\n[structure]\nfile = "s.npz"\n[requirements]\nband_hz = 5.0\n',
+     r"\[requirements\] band_hz"),
     ("[axis\n", "not valid TOML"),
 ])
 def test_errors_name_file_field_and_fix(tmp_path, toml, message):
@@ -111,9 +123,9 @@ def test_missing_folder_and_bad_reduce_boundary(tmp_path):
 def test_configuration_needs_pads_and_valid_words(tmp_path):
     write_fe_axis(tmp_path)
     axis = load_axis(tmp_path)
-    with pytest.raises(AxisFormatError, match=r"\[friction\] pads is missing"):
+    with pytest.raises(AxisFormatError, match=r"\[friction\] is missing.*pads"):
         axis.configuration(pads="locked")
     with pytest.raises(ValueError, match="'locked' or 'free'"):
         axis.configuration(pads="stuck")
-    with pytest.raises(AxisFormatError, match=r"\[drive.motor\] rotor is missing"):
+    with pytest.raises(AxisFormatError, match=r"\[drive\] is missing"):
         axis.configuration(motor="locked")

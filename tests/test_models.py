@@ -112,7 +112,7 @@ def test_build_script_reproduces_the_bundled_files(tmp_path, build, axis):
     bundled = (MODELS / "paper_x_axis" / "axis.toml").read_text()
     assert (tmp_path / "axis.toml").read_text() == bundled
     # the transmission ratio is lead / (2 pi) / belt ratio
-    assert_allclose(rebuilt.drive["transmission"]["ratio"], 0.020 / TWO_PI / 2.0, rtol=1e-6)
+    assert_allclose(rebuilt.drive.ratio, 0.020 / TWO_PI / 2.0, rtol=1e-6)
 
 
 def test_modes_command_reports_the_57_hz_mode(capsys):
@@ -142,4 +142,4 @@ def test_modes_command_errors(tmp_path, capsys):
     assert main(["modes", str(tmp_path)]) == 1
     assert "no axis description here" in capsys.readouterr().err
     assert main(["modes", str(MODELS / "two_mass_fig5"), "--motor", "locked"]) == 1
-    assert "[drive.motor] rotor is missing" in capsys.readouterr().err
+    assert "[drive] is missing" in capsys.readouterr().err

@@ -47,10 +47,10 @@ def run(args) -> int:
     share = model.participation(WP_X)
     j = int(share.argmax())
     rigid = int((omega == 0).sum())
-    band = axis.requirements.get("band_hz", (5.0, 300.0))
+    band = axis.requirements.band
     peak = None
     if rigid == 0:
-        w_peak, value = model.compliance_peak(WP_X, band[0] / HZ, band[1] / HZ)
+        w_peak, value = model.compliance_peak(WP_X, band[0], band[1])
         peak = {"wp_x_peak_compliance": value, "wp_x_peak_hz": w_peak * HZ}
     result = {
         "axis": axis.name, "pads": args.pads, "motor": args.motor, "n_dofs": model.n,
