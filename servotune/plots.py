@@ -13,7 +13,18 @@ from matplotlib.figure import Figure
 
 from . import twomass
 
-__all__ = ["plot_g_alpha", "plot_two_mass_compliance"]
+__all__ = [
+    "plot_bode",
+    "plot_compliance",
+    "plot_equivalent_damping",
+    "plot_g_alpha",
+    "plot_hysteresis",
+    "plot_response_hysteresis",
+    "plot_stability_lobes",
+    "plot_stability_map",
+    "plot_stribeck",
+    "plot_two_mass_compliance",
+]
 
 HZ_PER_RAD_S = 1.0 / (2.0 * math.pi)
 
@@ -392,4 +403,81 @@ def plot_stability_map(stability_map, zoa=None, title: str | None = None) -> Fig
     ax.set_title(title, fontsize=10)
     legend = ax.legend(handles=handles, fontsize=8, loc="upper left", facecolor="0.6")
     legend.get_frame().set_alpha(0.8)
+    return fig
+
+
+def plot_bode(loops, analyses=None, title: str = "Loop transfer functions") -> Figure:
+    """Bode diagram of loop transfer functions with their margins marked.
+
+    Parameters
+    ----------
+    loops : dict
+        ``{name: (omega [rad/s], L(j omega) complex array)}``.
+    analyses : dict, optional
+        ``{name: LoopAnalysis}``; crossover, phase margin and gain margin are marked.
+    """
+    fig = Figure(figsize=(8.5, 6.5), layout="constrained")
+    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
+    colors = ["tab:blue", "tab:red", "tab:green", "tab:purple"]
+    for i, (name, (omega, values)) in enumerate(loops.items()):
+        f_hz = np.asarray(omega) * HZ_PER_RAD_S
+        values = np.asarray(values).reshape(-1)
+        color = colors[i % len(colors)]
+        ax_mag.semilogx(f_hz, 20 * np.log10(np.abs(values)), color=color, lw=1.5,
+                        label=f"{name} loop")
+        ax_ph.semilogx(f_hz, np.degrees(np.unwrap(np.angle(values))), color=color, lw=1.5)
+        a = (analyses or {}).get(name)
+        if a is None:
+            continue
+        label = (f"{name}: PM {a.phase_margin_deg:.1f} deg"
+                 + (f", GM {a.gain_margin_db:.1f} dB" if math.isfinite(a.gain_margin) else "")
+                 + f", Ms {a.ms:.2f}")
+        if math.isfinite(a.crossover):
+            ax_mag.plot([a.crossover * HZ_PER_RAD_S], [0.0], "o", color=color, ms=6,
+                        label=label)
+        else:
+            ax_mag.plot([], [], "o", color=color, label=label)
+        if math.isfinite(a.phase_crossover):
+            ax_mag.axvline(a.phase_crossover * HZ_PER_RAD_S, color=color, ls=":", lw=1.0)
+    ax_mag.axhline(0.0, color="k", lw=0.8)
+    ax_mag.set_ylabel("|L| [dB]")
+    ax_mag.set_title(title)
+    ax_mag.grid(True, which="both", alpha=0.4)
+    ax_mag.legend(fontsize=8)
+    ax_ph.axhline(-180.0, color="k", lw=0.8)
+    ax_ph.set_ylabel("phase of L [deg]")
+    ax_ph.set_xlabel("frequency [Hz]")
+    ax_ph.grid(True, which="both", alpha=0.4)
+    return fig
+
+
+def plot_compliance(curves, title: str = "Work-piece compliance",
+                    marks=None) -> Figure:
+    """Magnitude and phase of compliances x/F.
+
+    Parameters
+    ----------
+    curves : list of (label, omega [rad/s], H [m/N] complex array)
+    marks : list of (label, omega [rad/s], value [m/N]), optional
+        Points to mark (e.g. peaks).
+    """
+    fig = Figure(figsize=(8.5, 6.5), layout="constrained")
+    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
+    for label, omega, values in curves:
+        f_hz = np.asarray(omega) * HZ_PER_RAD_S
+        values = np.asarray(values).reshape(-1)
+        (line,) = ax_mag.loglog(f_hz, np.abs(values), lw=1.4, label=label)
+        ax_ph.semilogx(f_hz, np.degrees(np.angle(values)), lw=1.2, color=line.get_color())
+    for label, omega, value in marks or ():
+        ax_mag.plot([omega * HZ_PER_RAD_S], [value], "v", color="k", ms=7)
+        ax_mag.annotate(label, (omega * HZ_PER_RAD_S, value), textcoords="offset points",
+                        xytext=(6, 6), fontsize=8)
+    ax_mag.set_ylabel("|x/F| [m/N]")
+    ax_mag.set_title(title)
+    ax_mag.grid(True, which="both", alpha=0.4)
+    ax_mag.legend(fontsize=8)
+    ax_ph.set_ylabel("phase [deg]")
+    ax_ph.set_xlabel("frequency [Hz]")
+    ax_ph.set_yticks(np.arange(-180, 181, 90))
+    ax_ph.grid(True, which="both", alpha=0.4)
     return fig

@@ -14,7 +14,7 @@ import sys
 __all__ = ["main", "build_parser"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("twomass", "modes", "check", "friction", "lobes")
+COMMANDS = ("twomass", "modes", "check", "friction", "bode", "compliance", "lobes")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -44,3 +44,34 @@ def print_json(obj) -> None:
     """Print one JSON object on standard output."""
     json.dump(to_jsonable(obj), sys.stdout, indent=2)
     sys.stdout.write("\n")
+
+
+CONTACT_KINDS = ("locked", "stiction", "viscous", "equivalent", "sliding", "free")
+
+
+def add_contact_options(parser, default: str = "viscous") -> None:
+    """``--contact`` and its parameters, as the analysis subcommands spell them."""
+    parser.add_argument("--contact", choices=CONTACT_KINDS, default=default,
+                        help="guide-way model: locked pads, stiction (LuGre presliding spring "
+                             "and damper), viscous (the axis' viscous-only damping, or --c), "
+                             "equivalent (LuGre describing function at --amplitude and "
+                             "--frequency-hz), sliding (LuGre linearised at --speed), free "
+                             f"(default {default})")
+    parser.add_argument("--c", type=float, default=None,
+                        help="viscous guide-way damping C [N s/m] (axis total) for --contact "
+                             "viscous")
+    parser.add_argument("--amplitude", type=float, default=None,
+                        help="vibration amplitude [m] for --contact equivalent")
+    parser.add_argument("--frequency-hz", type=float, default=None,
+                        help="vibration frequency [Hz] for --contact equivalent (default: the "
+                             "locked-pad work-piece resonance is not guessed; give it)")
+    parser.add_argument("--speed", type=float, default=None,
+                        help="sliding speed [m/s] for --contact sliding")
+
+
+def contact_from_args(axis, args):
+    """The contact model the options ask for."""
+    from ..analysis import axis_contact
+
+    return axis_contact(axis, args.contact, amplitude=args.amplitude,
+                        frequency_hz=args.frequency_hz, speed=args.speed, c=args.c)

@@ -1,0 +1,184 @@
+"""Linear analyses of an axis description: plants per contact model, loops, compliance, lobes.
+
+These functions join an :class:`~servotune.axis.Axis` to the model and analysis layers
+(:mod:`servotune.plant`, :mod:`servotune.frequency`, :mod:`servotune.chatter`) so that the
+command line and the report only call them. Every result is a frozen dataclass in SI units with
+a ``to_dict()`` for JSON (frequencies also in Hz under ``*_hz`` keys).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import control
+import numpy as np
+
+from . import frequency
+from .axis import Axis
+from .chatter import stability_lobes
+from .drive import Drive
+from .plant import Contact, build_plant, loop_transfer
+
+__all__ = [
+    "axis_contact",
+    "axis_plant",
+    "LoopReport",
+    "loop_report",
+    "ComplianceCurve",
+    "compliance_curve",
+    "uncontrolled_compliance",
+    "axis_lobes",
+    "default_omega",
+]
+
+HZ = 1.0 / (2.0 * math.pi)
+
+
+def default_omega(f_min_hz: float = 1.0, f_max_hz: float = 1000.0, n: int = 3000) -> np.ndarray:
+    """A log-spaced grid [rad/s]."""
+    return 2 * math.pi * np.geomspace(f_min_hz, f_max_hz, n)
+
+
+def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
+                 frequency_hz: float | None = None, speed: float | None = None,
+                 c: float | None = None) -> Contact:
+    """The axis' guide-way contact model of a kind.
+
+    ``viscous`` uses ``c`` [N s/m] when given, else the axis' viscous-only value; ``equivalent``
+    needs the vibration ``amplitude`` [m] and ``frequency_hz``; ``sliding`` the ``speed`` [m/s].
+    """
+    if axis.friction is None:
+        if kind == "free":
+            return Contact.free()
+        axis.pads  # raises the clear error  # noqa: B018
+    if kind == "viscous" and c is not None:
+        return Contact.viscous(c)
+    omega = None if frequency_hz is None else 2 * math.pi * frequency_hz
+    return axis.friction.contact(kind, amplitude=amplitude, omega=omega, v0=speed)
+
+
+def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,
+               controlled: bool = True) -> control.StateSpace:
+    """The linearised axis (see :func:`servotune.plant.build_plant`) with the axis' drive (or
+    ``drive``), or without control when ``controlled`` is False."""
+    drive = (drive or axis.require_drive()) if controlled else None
+    pads = axis.pads if axis.friction is not None else ()
+    return build_plant(axis.structure, drive, contact, pads if contact.kind != "free" else ())
+
+
+@dataclass(frozen=True)
+class LoopReport:
+    """The velocity and position loops of an axis: analyses and their frequency responses."""
+
+    contact: Contact
+    omega: np.ndarray
+    velocity: frequency.LoopAnalysis
+    position: frequency.LoopAnalysis
+    l_velocity: np.ndarray
+    l_position: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {"contact": self.contact.kind, "contact_note": self.contact.note,
+                "velocity_loop": self.velocity.to_dict(),
+                "position_loop": self.position.to_dict()}
+
+    def plot(self, title: str = "Loop transfer functions"):
+        from .plots import plot_bode
+
+        return plot_bode({"velocity": (self.omega, self.l_velocity),
+                          "position": (self.omega, self.l_position)},
+                         {"velocity": self.velocity, "position": self.position}, title=title)
+
+
+def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
+                omega=None) -> LoopReport:
+    """Margins, Ms and bandwidth of both loops (velocity with the position loop open,
+    position with the velocity loop closed).
+
+    Raises
+    ------
+    UnstableLoopError
+        If a closed loop is unstable.
+    """
+    drive = drive or axis.require_drive()
+    omega = default_omega(0.1, 3000.0, 8001) if omega is None else np.asarray(omega, float)
+    pads = axis.pads if axis.friction is not None else ()
+    out = {}
+    for loop in ("velocity", "position"):
+        lt = loop_transfer(axis.structure, drive, contact, pads, loop)
+        out[loop] = (frequency.analyse_loop(lt, omega),
+                     frequency.fast_frequency_response(lt, omega).complex.reshape(-1))
+    return LoopReport(contact, omega, out["velocity"][0], out["position"][0],
+                      out["velocity"][1], out["position"][1])
+
+
+@dataclass(frozen=True)
+class ComplianceCurve:
+    """A work-piece compliance curve and its peak (SI)."""
+
+    label: str
+    omega: np.ndarray
+    values: np.ndarray
+    peak_compliance: float
+    peak_frequency: float
+
+    def to_dict(self) -> dict:
+        return {"label": self.label, "peak_compliance": self.peak_compliance,
+                "peak_frequency_hz": self.peak_frequency * HZ}
+
+
+def _curve(label, plant, omega, band) -> ComplianceCurve:
+    values = frequency.compliance(plant, omega)
+    sel = (omega >= band[0]) & (omega <= band[1])
+    value, where = frequency.peak(omega[sel], values[sel])
+    return ComplianceCurve(label, omega, values, value, where)
+
+
+def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,
+                     label: str | None = None, controlled: bool | None = None
+                     ) -> ComplianceCurve:
+    """Work-piece X compliance with a contact model, closed loop when the axis has a drive
+    (or ``controlled`` says so); the peak is taken over the axis' requirement band."""
+    omega = default_omega() if omega is None else np.asarray(omega, float)
+    if controlled is None:
+        controlled = drive is not None or axis.drive is not None
+    plant = axis_plant(axis, contact, drive, controlled=controlled)
+    return _curve(label or contact.note or contact.kind, plant, omega, axis.requirements.band)
+
+
+def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[ComplianceCurve]:
+    """The paper's Fig 9: work-piece compliance with viscous guide-way damping C and no
+    motion control (the axis free to move), for each C [N s/m]."""
+    omega = default_omega() if omega is None else np.asarray(omega, float)
+    curves = []
+    for c in c_values:
+        plant = axis_plant(axis, Contact.viscous(c), controlled=False)
+        curves.append(_curve(f"C = {c:.0e} N s/m", plant, omega, axis.requirements.band))
+    return curves
+
+
+def axis_lobes(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,
+               n_speeds: int = 2000):
+    """Zero-order stability lobes of the closed-loop axis in its feed direction, with the
+    axis' milling set-up (``[cutting]``) over its speed range."""
+    cutting = axis.require_cutting()
+    omega = default_omega(1.0, 2000.0, 6000) if omega is None else np.asarray(omega, float)
+    plant = axis_plant(axis, contact, drive)
+    frequency.require_stable(plant)
+    d = cutting.direction
+    frd = frequency.fast_frequency_response(plant, omega, inputs=[f"f_wp_{d}"],
+                                            outputs=[f"wp_{d}"])
+    speeds = np.linspace(*cutting.speed_rpm, n_speeds)
+    return stability_lobes(frd, cutting.setup, speeds, direction=d)
+
+
+def with_design(drive: Drive, kv: float | None = None, kp: float | None = None,
+                ti: float | None = None) -> Drive:
+    """A drive with new gains (None keeps the current value)."""
+    from .drive import PIController
+
+    vel = drive.velocity_loop
+    return replace(drive, kv=drive.kv if kv is None else kv,
+                   velocity_loop=PIController(vel.kp if kp is None else kp,
+                                              vel.ti if ti is None else ti))
