@@ -104,22 +104,28 @@ def fast_frequency_response(sys: control.StateSpace, omega, inputs=None, outputs
         t = t[0]
         b, c = b / t[:, None], c * t[None, :]
         lam, v = np.linalg.eig(a)
-        h, q = scipy.linalg.hessenberg(a, calc_q=True)
-        qb, cq = q.T @ b, c @ q
-        if np.isfinite(np.linalg.cond(v)):
-            cv, wb = c @ v, np.linalg.solve(v, b)
-            resp = np.einsum("pi,ki,im->pmk", cv, 1.0 / (s[:, None] - lam[None, :]), wb)
-            # a posteriori check against the Hessenberg solve where the response is largest
-            # (next to the least damped poles) and at a spread of frequencies
+        try:
+            wb = np.linalg.solve(v, b)
+        except np.linalg.LinAlgError:
+            wb = None
+        if wb is not None and np.all(np.isfinite(wb)):
+            # residues R_i = (C v_i)(w_i^T B), summed against 1/(s - lambda_i) in one product
+            residues = ((c @ v)[:, None, :] * wb.T[None, :, :]).reshape(-1, lam.size)
+            resp = (residues @ (1.0 / (s[None, :] - lam[:, None]))).reshape(
+                c.shape[0], b.shape[1], s.size)
+            # a posteriori check against direct solves where the response is largest (next to
+            # the least damped poles) and at a spread of frequencies
             mag = np.abs(resp).reshape(-1, s.size).max(axis=0)
             check = np.unique(np.concatenate([np.argsort(mag)[-4:],
                                               np.linspace(0, s.size - 1, 6).astype(int)]))
-            exact = _hessenberg_response(h, qb, cq, s[check])
+            eye = np.eye(a.shape[0])
+            exact = np.moveaxis(c @ np.linalg.solve(s[check, None, None] * eye - a, b), 0, -1)
             err = np.abs(resp[:, :, check] - exact).max() / max(np.abs(exact).max(), 1e-300)
             if not err <= rtol:
                 resp = None
         if resp is None:
-            resp = _hessenberg_response(h, qb, cq, s)
+            h, q = scipy.linalg.hessenberg(a, calc_q=True)
+            resp = _hessenberg_response(h, q.T @ b, c @ q, s)
     else:
         resp = np.zeros((len(i_out), len(i_in), omega.size), dtype=complex)
     resp = resp + d[:, :, None]
@@ -162,8 +168,17 @@ def modal_receptance(structure: ModalModel, omega, inputs, outputs) -> np.ndarra
     if np.abs(off).max(initial=0.0) > 1e-9 * max(np.abs(modal_d).max(initial=0.0), 1e-300):
         return np.moveaxis(structure.receptance(omega, inputs, outputs), 0, -1)
     two_zeta_w = np.diag(modal_d)
-    den = wr[None, :] ** 2 - omega[:, None] ** 2 + 1j * omega[:, None] * two_zeta_w[None, :]
-    return np.einsum("pr,kr,mr->pmk", phi[i_out], 1.0 / den, phi[i_in])
+    inv_den = 1.0 / (wr[:, None] ** 2 - omega[None, :] ** 2
+                     + 1j * omega[None, :] * two_zeta_w[:, None])  # (r, k)
+    shapes = phi[i_out][:, None, :] * phi[i_in][None, :, :]  # (p, m, r)
+    return (shapes.reshape(-1, wr.size) @ inv_den).reshape(len(i_out), len(i_in), omega.size)
+
+
+def _tf_values(tf, s: np.ndarray) -> np.ndarray:
+    """A SISO transfer function evaluated at complex frequencies (vectorised)."""
+    num = np.asarray(tf.num[0][0], dtype=float)
+    den = np.asarray(tf.den[0][0], dtype=float)
+    return np.polyval(num, s) / np.polyval(den, s)
 
 
 def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
@@ -173,7 +188,7 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
 
     The structure's receptance between its ports (the force DOF, the pads, the motor rotor and
     stator and the encoder) comes from :func:`modal_receptance`; at each frequency the port
-    forces are expressed through the port displacements,
+    forces are expressed through the port displacements, ``f = G(jw) x``:
 
     * pad (each of n): ``f = -(k + j w c)/n * x`` for spring/damper contacts, or
       ``f = -Z(jw)/n * j w x`` for a dynamic (sliding) contact Z: v -> F;
@@ -181,7 +196,9 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
       ``T_set = F_lp F_notch C_v (omega_cmd - j w phi)``,
       ``omega_cmd = -(Kv / r) x_fb`` (no reference), phi = rotor - stator angle,
 
-    and the linear system ``(I - R G) x = R e_F`` is solved for the port displacements.
+    and the small linear systems ``(I - R G) x = R e_F`` are solved for all frequencies at
+    once. The cost grows with the number of modes times the number of ports squared, not with
+    the cube of the closed loop's state dimension.
 
     Returns
     -------
@@ -201,50 +218,42 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
     ports = list(dict.fromkeys([force, *outputs, *pads, *motor]
                                + ([drive.encoder] if drive is not None
                                   and drive.feedback == "linear" else [])))
-    rec = modal_receptance(structure, omega, ports, ports)  # (p, p, k)
+    rec = np.moveaxis(modal_receptance(structure, omega, ports, ports), -1, 0)  # (k, p, p)
     idx = {p: i for i, p in enumerate(ports)}
-    n = len(ports)
-    out = np.empty((len(outputs), omega.size), dtype=complex)
-    s_all = 1j * omega
-    if contact.kind == "sliding":
-        z_sliding = contact.system(s_all) if omega.size > 1 else np.atleast_1d(
-            contact.system(s_all[0]))
-        z_sliding = np.asarray(z_sliding).reshape(-1)
-    for k, s in enumerate(s_all):
-        g = np.zeros((n, n), dtype=complex)  # port forces per port displacement
+    n, s = len(ports), 1j * omega
+    g = np.zeros((omega.size, n, n), dtype=complex)  # port forces per port displacement
+    if pads:
+        if contact.kind == "sliding":
+            z = _tf_values(control.tf(contact.system), s) * s
+        else:
+            z = contact.stiffness + s * contact.damping
         for p in pads:
-            if contact.kind == "sliding":
-                z = z_sliding[k] * s
-            else:
-                z = contact.stiffness + s * contact.damping
-            g[idx[p], idx[p]] -= z / len(pads)
-        if drive is not None:
-            m = drive.motor
-            ci = complex(drive.current_loop.transfer_function()(s))
-            cv = complex(drive.velocity_loop.transfer_function()(s))
-            filt = complex(drive.torque_filter()(s))
-            den = s * m.inductance + m.resistance + ci
-            rel = np.zeros(n, dtype=complex)  # phi = rel . x
-            rel[idx[m.rotor]] = 1.0
-            if m.stator:
-                rel[idx[m.stator]] = -1.0
-            fb = np.zeros(n, dtype=complex)  # x_fb = fb . x
-            if drive.feedback == "linear":
-                fb[idx[drive.encoder]] = 1.0
-            else:
-                fb = drive.ratio * rel
-            omega_cmd = -(drive.kv / drive.ratio) * fb
-            t_set = filt * cv * (omega_cmd - s * rel)
-            torque = (ci * t_set - m.torque_constant * m.back_emf_constant * s * rel) / den
-            g[idx[m.rotor]] += torque
-            if m.stator:
-                g[idx[m.stator]] -= torque
-        r = rec[:, :, k]
-        e = np.zeros(n)
-        e[idx[force]] = 1.0
-        x = np.linalg.solve(np.eye(n) - r @ g, r @ e)
-        out[:, k] = x[[idx[o] for o in outputs]]
-    return out
+            g[:, idx[p], idx[p]] -= z / len(pads)
+    if drive is not None:
+        m = drive.motor
+        ci = _tf_values(drive.current_loop.transfer_function(), s)
+        cv = _tf_values(drive.velocity_loop.transfer_function(), s)
+        filt = _tf_values(drive.torque_filter(), s)
+        den = s * m.inductance + m.resistance + ci
+        rel = np.zeros(n)  # phi = rel . x
+        rel[idx[m.rotor]] = 1.0
+        if m.stator:
+            rel[idx[m.stator]] = -1.0
+        if drive.feedback == "linear":
+            fb = np.zeros(n)
+            fb[idx[drive.encoder]] = 1.0
+        else:
+            fb = drive.ratio * rel
+        a = ci * filt * cv
+        b = m.torque_constant * m.back_emf_constant
+        # T = -(a Kv/r fb + (a + b) s rel) . x / den
+        torque = -((a * drive.kv / drive.ratio)[:, None] * fb[None, :]
+                   + ((a + b) * s)[:, None] * rel[None, :]) / den[:, None]
+        g += rel[None, :, None] * torque[:, None, :]
+    e = np.zeros(n)
+    e[idx[force]] = 1.0
+    x = np.linalg.solve(np.eye(n)[None] - rec @ g, (rec @ e)[:, :, None])[:, :, 0]
+    return x[:, [idx[o] for o in outputs]].T
 
 
 def compliance(plant: control.StateSpace, omega, force: str = "f_wp_x",
