@@ -37,7 +37,7 @@ __all__ = ["NonlinearAxis", "simulate", "DEFAULT_STEP", "DEFAULT_RECORD_STEP"]
 
 DEFAULT_STEP = 2.5e-4        # [s]: 40 steps per cycle at 100 Hz (shorter where friction asks)
 DEFAULT_RECORD_STEP = 5e-4   # [s]
-DEFAULT_TOLERANCE = 1e-3     # local error of the pad motion per step, relative to vs and Fs/sigma0
+DEFAULT_TOLERANCE = 1e-4     # local error of the pad motion per step, relative to vs and Fs/sigma0
 CHECKPOINT = 0.05            # [s] between energy checkpoints (and progress reports)
 
 
