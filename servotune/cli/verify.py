@@ -104,7 +104,7 @@ def run(args) -> int:
               f"; describing function there: {dfp['resonance_hz']:.1f} Hz, "
               f"{dfp['peak_m_per_n']:.3g} m/N")
         verdict = ", ".join(f"{n} {'agrees' if row[f'agrees_{n}'] else 'differs'}"
-                            for n in ("locked", "viscous", "describing"))
+                            for n in ("locked", "presliding", "viscous", "describing"))
         print(f"    {verdict} (within {result['freq_tol']:.0%} in frequency and "
               f"{result['peak_tol']:.0%} in peak)")
     sys.stdout.flush()

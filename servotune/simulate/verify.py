@@ -5,7 +5,9 @@ tuned on linear models. :func:`verify_design` simulates it with LuGre friction a
 sine sweeps standing still, and compares each sweep's resonance and peak oscillation per force
 with three linear predictions of the closed loop (:func:`servotune.frequency.port_compliance`):
 
-* ``locked``: pads held (stiction at small amplitude, the paper's remark A);
+* ``locked``: pads held rigidly;
+* ``presliding``: pads on the LuGre presliding contact (spring sigma0, damper sigma1 + C), the
+  small-amplitude limit (the paper's remark A);
 * ``viscous``: pads as the viscous damper C the design assumes;
 * ``describing``: pads as the LuGre describing function (Ceq, Keq; paper Eq 8-10) at the pad
   vibration amplitude the simulation shows at its resonance.
@@ -22,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import control
 import numpy as np
 
 from ..drive import PIController
@@ -76,7 +79,9 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
         mag, w = peak(omega, h)
         return {"resonance_hz": w * HZ, "peak_m_per_n": mag}
 
+    p = setup.lugre
     linear = {"locked": predict(Contact.locked()),
+              "presliding": predict(Contact.stiction(p.sigma0, p.sigma1, p.sigma2)),
               "viscous": predict(Contact.viscous(setup.viscous))}
     axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, LuGreFriction(setup.lugre))
     jobs = [(axis, float(f), f_start_hz, f_end_hz, duration) for f in forces]
@@ -90,11 +95,12 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
                                        2 * math.pi * sim["resonance_hz"])
         row = dict(sim)
         row["force_pp_n"] = float(f)
-        row["describing"] = predict(Contact.equivalent(float(ceq), float(keq),
-                                                       sim["pad_amplitude_m"]))
+        # F = Keq x + Ceq v as a contact from velocity (Keq of the LuGre element may be
+        # negative at large sigma1, which a spring Contact refuses)
+        element = control.ss([[0.0]], [[1.0]], [[float(keq)]], [[float(ceq)]])
+        row["describing"] = predict(Contact.sliding(element))
         row["describing"].update({"ceq": float(ceq), "keq": float(keq)})
-        for name, pred in (("locked", linear["locked"]), ("viscous", linear["viscous"]),
-                           ("describing", row["describing"])):
+        for name, pred in [*linear.items(), ("describing", row["describing"])]:
             row[f"agrees_{name}"] = bool(
                 abs(sim["resonance_hz"] / pred["resonance_hz"] - 1) <= freq_tol
                 and abs(sim["peak_m_per_n"] / pred["peak_m_per_n"] - 1) <= peak_tol)
