@@ -49,6 +49,33 @@ from .friction.equivalent import (
     stiction_describing_function,
 )
 from .friction.identify import FrictionFit, fit_presliding, fit_steady_state
+# chatter: stability lobes (servotune.chatter)
+from .chatter import (
+    MillingSetup,
+    Mode,
+    StabilityLobes,
+    StabilityMap,
+    absolute_stability_limit,
+    chatter_margin,
+    critical_depth,
+    modal_compliance,
+    read_frf_csv,
+    sdm_lobes,
+    stability_lobes,
+    stability_map,
+)
+
+# structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
+from .axis import Axis, AxisFormatError, load_axis
+from .structure import (
+    CraigBamptonCheck,
+    MatrixFileError,
+    StructureBuilder,
+    cb_check,
+    craig_bampton,
+    read_structure,
+    write_npz,
+)
 from .twomass import (
     TwoMassAnalysis,
     TwoMassSystem,
@@ -93,6 +120,17 @@ __all__ = [
     # structure
     "ModalModel",
     "UnknownDofError",
+    # structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
+    "craig_bampton",
+    "cb_check",
+    "CraigBamptonCheck",
+    "read_structure",
+    "write_npz",
+    "MatrixFileError",
+    "StructureBuilder",
+    "Axis",
+    "AxisFormatError",
+    "load_axis",
     # twomass
     "TwoMassSystem",
     "TwoMassAnalysis",
@@ -126,4 +164,17 @@ __all__ = [
     "FrictionFit",
     "fit_presliding",
     "fit_steady_state",
+    # chatter
+    "MillingSetup",
+    "Mode",
+    "StabilityLobes",
+    "StabilityMap",
+    "absolute_stability_limit",
+    "chatter_margin",
+    "critical_depth",
+    "modal_compliance",
+    "read_frf_csv",
+    "sdm_lobes",
+    "stability_lobes",
+    "stability_map",
 ]

@@ -140,33 +140,60 @@ class Requirements:
 
 @dataclass(frozen=True)
 class ChatterTarget:
-    """Chatter-limit objective in the oriented one-direction form.
+    """Chatter-limit objective in the oriented one-direction zero-order form.
 
-    The limiting depth of cut is ``b_lim = -1 / (2 ks Re G(j w_c))`` at the chatter frequency,
-    and the absolute limit ``b_crit = -1 / (2 ks min_w Re G)`` where G is the work-piece
-    compliance in the feed direction (Tlusty; Altintas and Budak 1995 for milling, where
-    ``ks = N Kt alpha_xx / (4 pi)`` with the average directional factor alpha_xx).
+    With only the feed direction flexible, the oriented FRF is ``Phi = mu G`` (G the work-piece
+    compliance, mu the directional factor of the milling set-up) and the limiting depth is
+    ``b_lim = -1 / (2 Kt Re Phi)`` at the chatter frequency; the absolute limit is
+    ``b_crit = -1 / (2 Kt min_w Re Phi)`` (Tlusty; Altintas and Budak 1995; see
+    :mod:`servotune.chatter.zoa`).
 
     Parameters
     ----------
-    ks : float
-        Oriented cutting stiffness per unit depth [N/m^2] (> 0).
+    kt : float
+        Tangential cutting coefficient [N/m^2] (> 0).
+    mu : float
+        Directional factor mu = D_xx/Kt [-] (non-zero; may be negative).
     required_depth : float, optional
         Required axial depth [m]; the margin is b_crit / required_depth.
+
+    Examples
+    --------
+    A single mode of stiffness k and damping zeta has min Re G = -1/(4 k zeta (1 + zeta)), so
+    Tlusty's b_crit = 2 k zeta (1 + zeta) / (Kt mu):
+
+    >>> k, zeta, target = 1e7, 0.02, ChatterTarget(kt=6e8, mu=0.5)
+    >>> b = target.b_crit(target.mu * -1.0 / (4 * k * zeta * (1 + zeta)))
+    >>> round(b / (2 * k * zeta * (1 + zeta) / (6e8 * 0.5)), 12)
+    1.0
     """
 
-    ks: float
+    kt: float
+    mu: float
     required_depth: float | None = None
 
     def __post_init__(self) -> None:
-        if not (self.ks > 0 and math.isfinite(self.ks)):
-            raise ValueError(f"ChatterTarget.ks must be finite and > 0 N/m^2, got {self.ks!r}")
+        if not (self.kt > 0 and math.isfinite(self.kt)):
+            raise ValueError(f"ChatterTarget.kt must be finite and > 0 N/m^2, got {self.kt!r}")
+        if not (math.isfinite(self.mu) and self.mu != 0):
+            raise ValueError(f"ChatterTarget.mu must be finite and non-zero, got {self.mu!r}")
         if self.required_depth is not None and not self.required_depth > 0:
             raise ValueError("ChatterTarget.required_depth must be > 0 m")
 
+    @classmethod
+    def from_setup(cls, setup, direction: str = "x", required_depth: float | None = None):
+        """From a :class:`~servotune.chatter.MillingSetup` (flexible direction ``x`` or ``y``)."""
+        from .chatter import directional_factor
+
+        return cls(setup.kt, directional_factor(setup, direction), required_depth)
+
     def b_crit(self, min_real: float) -> float:
-        """b_crit [m] from the most negative real part of the compliance [m/N]."""
-        return math.inf if min_real >= 0 else -1.0 / (2.0 * self.ks * min_real)
+        """b_crit [m] from the most negative real part of the ORIENTED FRF mu G [m/N]."""
+        return math.inf if min_real >= 0 else -1.0 / (2.0 * self.kt * min_real)
+
+    def margin(self, b_crit: float) -> float | None:
+        """b_crit over the required depth (None without a requirement)."""
+        return None if self.required_depth is None else b_crit / self.required_depth
 
 
 @dataclass(frozen=True)
@@ -532,16 +559,11 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
     peak, w_peak = frequency.peak(omega, h)
     b_crit = min_real = None
     if problem.chatter is not None:
-        i = int(np.argmin(h.real))
-        min_real = float(h.real[i])
-        if 0 < i < omega.size - 1:  # refine the minimum of Re G by a parabola in omega
-            x, y = omega[i - 1:i + 2], h.real[i - 1:i + 2]
-            a2, a1, a0 = np.polyfit(x - x[1], y, 2)
-            if a2 > 0:
-                xm = -a1 / (2 * a2)
-                if abs(xm) <= x[2] - x[0]:
-                    min_real = min(min_real, float(a0 - a1 * a1 / (4 * a2)))
-        b_crit = problem.chatter.b_crit(min_real)
+        from .chatter import critical_depth
+
+        oriented = problem.chatter.mu * h.real
+        b_crit = critical_depth(oriented, problem.chatter.kt, omega)
+        min_real = -1.0 / (2.0 * problem.chatter.kt * b_crit)
     velocity = position = None
     if drive is not None:
         loop_omega = np.geomspace(req.loop_band[0], req.loop_band[1], 8001)
@@ -602,7 +624,8 @@ def _scale_factors(problem: TuningProblem, design: Design):
     """Initial peak and initial -min Re G (for scaling) from a fine port-model evaluation."""
     res = evaluate(problem, design, _grid(*problem.requirements.band, 4000))
     h = res["compliance"]
-    return float(np.abs(h).max()), float(max(-h.real.min(), 1e-30))
+    mu = problem.chatter.mu if problem.chatter is not None else 1.0
+    return float(np.abs(h).max()), float(max(-(mu * h.real).min(), 1e-30))
 
 
 class _Solver:
@@ -636,7 +659,7 @@ class _Solver:
         if w_peak > 0:
             add(h.abs2() / h0**2 - t * t, -ca.inf, 0.0, "compliance peak")
         if w_chatter > 0:
-            add(h.re / s0 + q, 0.0, ca.inf, "chatter")
+            add(problem.chatter.mu * h.re / s0 + q, 0.0, ca.inf, "chatter")
         if problem.drive is not None:
             loops = _responses(problem, _port_data(problem, loop_grid), values)
             for loop in ("velocity", "position"):
@@ -662,9 +685,16 @@ class _Solver:
         self.ubx = np.array(hi + [ca.inf, ca.inf])
         self.w_peak, self.w_chatter = w_peak, w_chatter
 
-    def solve(self, design: Design, t0: float, q0: float):
+    def solve(self, design: Design, t0: float, q0: float, region: float | None = None):
+        """Solve from ``design``; ``region`` limits each log-variable to +-region around it
+        (a trust region that keeps the step continuous, see :func:`tune`)."""
         p0 = [math.log(getattr(design, v) / self.scale[v]) for v in self.free]
-        sol = self.solver(x0=np.array(p0 + [t0, q0]), lbx=self.lbx, ubx=self.ubx,
+        lbx, ubx = self.lbx.copy(), self.ubx.copy()
+        if region is not None:
+            n = len(p0)
+            lbx[:n] = np.maximum(lbx[:n], np.array(p0) - region)
+            ubx[:n] = np.minimum(ubx[:n], np.array(p0) + region)
+        sol = self.solver(x0=np.array(p0 + [t0, q0]), lbx=lbx, ubx=ubx,
                           lbg=self.lbg, ubg=self.ubg)
         stats = self.solver.stats()
         x = np.array(sol["x"]).ravel()
@@ -740,9 +770,10 @@ def _exchange_points(problem: TuningProblem, design: Design, models: dict):
     if problem.weights[0] > 0:
         checks += [("peak", w) for w in _local_extrema(
             fine_band["omega"], np.abs(fine_band["compliance"]), True, 4)]
+    mu = problem.chatter.mu if problem.chatter is not None else 1.0
     if problem.weights[1] > 0:
         checks += [("real", w) for w in _local_extrema(
-            fine_band["omega"], fine_band["compliance"].real, False, 4)]
+            fine_band["omega"], mu * fine_band["compliance"].real, False, 4)]
     if problem.drive is not None:
         fine_loop = models["fine_loop"](design)
         for key in ("loop_velocity", "loop_position"):
@@ -760,8 +791,8 @@ def _exchange_points(problem: TuningProblem, design: Design, models: dict):
                         / np.abs(grid_band["compliance"]).max() - 1)
             added_band += ws
         elif kind == "real":
-            worst = max(worst, exact["compliance"].real[sel].min()
-                        / grid_band["compliance"].real.min() - 1)
+            worst = max(worst, (mu * exact["compliance"].real[sel]).min()
+                        / (mu * grid_band["compliance"].real).min() - 1)
             added_band += ws
         else:
             grid_loop = models["loop"](design)
@@ -771,8 +802,8 @@ def _exchange_points(problem: TuningProblem, design: Design, models: dict):
     return added_band, added_loop, worst
 
 
-def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 20,
-         tolerance: float = 1e-9) -> TuningResult:
+def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 30,
+         tolerance: float = 1e-6) -> TuningResult:
     """Optimise the free design variables with casadi/IPOPT, then verify with python-control.
 
     Parameters
@@ -841,7 +872,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     design = best[1]
     models = {"fine_band": ResponseModel(problem, _grid(*req.band, 6000)),
               "fine_loop": ResponseModel(problem, _grid(*req.loop_band, 6000))}
-    rounds, worst_rel = 0, math.inf
+    rounds, worst_rel, exchange_failed = 0, math.inf, False
     for rounds in range(1, max_exchange + 1):  # noqa: B007
         models["band"] = ResponseModel(problem, band_grid)
         models["loop"] = ResponseModel(problem, loop_grid)
@@ -851,10 +882,19 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         band_grid = np.unique(np.concatenate([band_grid, added_band]))
         loop_grid = np.unique(np.concatenate([loop_grid, added_loop]))
         solver = _Solver(problem, band_grid, loop_grid, h0, s0)
-        new, _, _, f, stats, g = solver.solve(design, 1.0, 1.0)
-        iterations += stats["iter_count"]
-        if _converged(stats) and _stable(problem, new):
-            design, best = new, (f, new, stats, g)
+        # the new grid points may cut off the current design; re-solve from it, shrinking a
+        # trust region until the step stays on the stable side (frequency constraints alone
+        # cannot tell a stable design from an unstable one far away)
+        accepted = False
+        for region in (None, 0.5, 0.1, 0.02):
+            new, _, _, f, stats, g = solver.solve(design, 1.0, 1.0, region)
+            iterations += stats["iter_count"]
+            if _converged(stats) and _stable(problem, new):
+                design, best, accepted = new, (f, new, stats, g), True
+                break
+        if not accepted:
+            exchange_failed = True
+            break
     g = best[3]
     active = []
     for v in problem.free:
@@ -874,10 +914,15 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     predicted = models["fine_band"](design)
     pred = {"peak_compliance": float(np.abs(predicted["compliance"]).max())}
     if problem.chatter is not None:
-        pred["b_crit"] = problem.chatter.b_crit(float(predicted["compliance"].real.min()))
+        pred["b_crit"] = problem.chatter.b_crit(
+            float((problem.chatter.mu * predicted["compliance"].real).min()))
 
     reasons = []
-    if worst_rel > max(tolerance, 1e-4):
+    if exchange_failed:
+        reasons.append("the optimiser could not satisfy the constraints at frequencies added by "
+                       f"the grid exchange (round {rounds}); the design is the last feasible one "
+                       "on the previous grid")
+    elif worst_rel > max(tolerance, 1e-4):
         reasons.append(f"the frequency grid did not converge (true extrema {worst_rel:.2g} "
                        f"beyond the grid after {rounds} exchange rounds)")
     after = None

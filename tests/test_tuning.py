@@ -35,7 +35,7 @@ def test_two_mass_copt_is_the_closed_form(alpha):
     structure, system, req = two_mass(alpha=alpha)
     problem = TuningProblem(structure, ["pad1.x"], c=1e5, free=("c",), requirements=req,
                             bounds={"c": (1e3, 1e8)})
-    result = tune(problem, starts=2)
+    result = tune(problem, starts=2, tolerance=1e-10)
     assert result.success, result.reasons
     assert_allclose(result.design.c, twomass.optimal_damping(system), rtol=1e-4)
     assert_allclose(result.after.peak_compliance, twomass.g_alpha(alpha) / system.k, rtol=1e-6)

@@ -14,7 +14,7 @@ import sys
 __all__ = ["main", "build_parser"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("twomass", "friction", "table3", "verify")
+COMMANDS = ("twomass", "modes", "check", "friction", "lobes", "table3", "verify")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -298,3 +298,53 @@ class ModalModel:
             dyn = self.stiffness - w * w * self.mass + 1j * w * self.damping
             out[j] = np.linalg.solve(dyn, rhs)[i_out]
         return out
+
+    # -- participation -----------------------------------------------------------------------
+    def modal_compliance(self, dof: str) -> np.ndarray:
+        """Static compliance each mode contributes at a DOF: phi_j(dof)^2 / omega_j^2 [m/N]
+        (0 for rigid-body modes), in the order of :meth:`natural_frequencies`.
+
+        Summed over the modes it is the static driving-point compliance of a model without
+        rigid-body modes (modal expansion of K^-1)."""
+        omega, phi = self._modes
+        row = phi[int(self.index(dof))]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(omega > 0, row**2 / np.where(omega > 0, omega, 1.0) ** 2, 0.0)
+
+    def participation(self, dof: str) -> np.ndarray:
+        """Share of each mode in the motion of a DOF: its part of the static compliance there,
+        phi_j(dof)^2 / omega_j^2 over the sum of all flexible modes (rigid-body modes get 0).
+
+        Examples
+        --------
+        A heavy tip mass on two springs in series with a light mass between them: the low mode
+        (the tip swinging on both springs) carries nearly all the static compliance at the tip:
+
+        >>> chain = ModalModel([[1.0, 0], [0, 100.0]], [[2e6, -1e6], [-1e6, 1e6]], ["a", "b"])
+        >>> share = chain.participation("b")
+        >>> bool(share[0] > 0.99 and abs(share.sum() - 1) < 1e-12)
+        True
+        """
+        c = self.modal_compliance(dof)
+        total = c.sum()
+        return c / total if total > 0 else c
+
+    def compliance_peak(self, dof: str, omega_min: float, omega_max: float,
+                        n: int = 2000) -> tuple[float, float]:
+        """Largest driving-point receptance magnitude |X/F| at a DOF in [omega_min, omega_max]
+        [rad/s]: ``(omega_peak, peak)`` from a logarithmic grid of ``n`` points refined by a
+        bounded scalar search around the best point."""
+        from scipy.optimize import minimize_scalar
+
+        if not 0 < omega_min < omega_max:
+            raise ValueError(f"need 0 < omega_min < omega_max, got {omega_min}, {omega_max}")
+        grid = np.geomspace(omega_min, omega_max, n)
+        mag = np.abs(self.receptance(grid, [dof], [dof])[:, 0, 0])
+        j = int(np.argmax(mag))
+        lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, n - 1)]
+        res = minimize_scalar(lambda w: -abs(self.receptance([w], [dof], [dof])[0, 0, 0]),
+                              bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-9 * hi})
+        if -res.fun > mag[j]:
+            return float(res.x), float(-res.fun)
+        return float(grid[j]), float(mag[j])

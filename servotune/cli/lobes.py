@@ -1,0 +1,146 @@
+"""``servotune lobes``: regenerative-chatter stability lobes of a milling set-up (paper, sec 2)."""
+
+from __future__ import annotations
+
+import warnings
+
+from .. import chatter, plots, report
+from ._common import add_output_options, print_json
+
+HZ = 1.0 / (2.0 * 3.141592653589793)
+MM = 1e-3
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "lobes", help="chatter stability lobes, b_crit and the chatter margin (sec 2)",
+        description="Stability lobes of milling from the tool/work-piece compliance: the "
+                    "zero-order approximation (Altintas and Budak 1995) or the "
+                    "semi-discretisation (Insperger and Stepan 2004). Give the compliance as "
+                    "modes (--mode, --mode-y) or as a measured FRF (--frf). The default cutting "
+                    "set-up is the Insperger-Stepan benchmark: 2 teeth, Kt = 6e8, Kn = 2e8 "
+                    "N/m^2, full slot, down-milling.")
+    p.add_argument("axis", nargs="?", metavar="AXIS",
+                   help="an axis model (not available yet: use --mode or --frf)")
+    p.add_argument("--mode", nargs=3, type=float, action="append", default=[],
+                   metavar=("FN_HZ", "ZETA", "K_N_PER_M"),
+                   help="a mode of the compliance in --direction: natural frequency [Hz], "
+                        "damping ratio [-], modal stiffness [N/m] (repeatable)")
+    p.add_argument("--mode-y", nargs=3, type=float, action="append", default=[],
+                   metavar=("FN_HZ", "ZETA", "K_N_PER_M"),
+                   help="a mode in y, normal to the feed (repeatable), for 2-D compliance")
+    p.add_argument("--direction", choices=("x", "y"), default="x",
+                   help="direction of the --mode modes and of a SISO compliance "
+                        "(x = feed, default)")
+    p.add_argument("--frf", metavar="FILE.csv",
+                   help="measured compliance: columns f_hz and re_ij_m_per_n, im_ij_m_per_n for "
+                        "ij in xx, xy, yx, yy (at least xx or yy)")
+    p.add_argument("--teeth", type=int, default=2, help="number of teeth (2)")
+    p.add_argument("--kt", type=float, default=6e8,
+                   help="tangential cutting coefficient Kt [N/m^2] (6e8)")
+    p.add_argument("--kn", type=float, default=2e8,
+                   help="normal (radial) cutting coefficient Kn [N/m^2] (2e8); "
+                        "Altintas' ratio Kr = Kn/Kt")
+    p.add_argument("--immersion", type=float, default=1.0,
+                   help="radial immersion a/D in (0, 1] (1 = full slot)")
+    p.add_argument("--milling", choices=("down", "up"), default="down",
+                   help="down (climb) or up (conventional) milling (down)")
+    p.add_argument("--speed-rpm", nargs=2, type=float, metavar=("MIN", "MAX"),
+                   help="spindle-speed range [rpm] (default: the first ten lobes)")
+    p.add_argument("--speeds", type=int,
+                   help="number of spindle speeds (default 2000 for zoa, 200 for sdm)")
+    p.add_argument("--method", choices=("zoa", "sdm"), default="zoa",
+                   help="zoa: zero-order approximation; sdm: semi-discretisation (slower; "
+                        "finds the flip lobes of low immersion; needs --mode)")
+    p.add_argument("--lobes", type=int, help="zoa: number of lobes (default: enough for MIN)")
+    p.add_argument("--intervals", type=int, default=chatter.DEFAULT_INTERVALS,
+                   help=f"sdm: intervals per tooth period ({chatter.DEFAULT_INTERVALS})")
+    p.add_argument("--depth-max-mm", type=float,
+                   help="sdm: deepest cut examined [mm] (default 5 x the zero-order b_crit)")
+    p.add_argument("--required-depth-mm", type=float,
+                   help="required axial depth [mm]: report the chatter margin")
+    p.add_argument("--no-plots", action="store_true", help="do not write the figure")
+    add_output_options(p)
+    p.set_defaults(func=run)
+
+
+def _compliance(args):
+    if args.axis is not None:
+        raise ValueError(f"axis models are not available yet (asked for {args.axis!r}); give "
+                         "the compliance with --mode FN_HZ ZETA K_N_PER_M or --frf FILE.csv")
+    modes = ([chatter.Mode.from_hz(*m, direction=args.direction) for m in args.mode]
+             + [chatter.Mode.from_hz(*m, direction="y") for m in args.mode_y])
+    if args.frf and modes:
+        raise ValueError("give either modes (--mode/--mode-y) or --frf, not both")
+    if args.frf:
+        return chatter.read_frf_csv(args.frf), f"measured FRF {args.frf}"
+    if not modes:
+        raise ValueError("give the compliance: AXIS, --mode FN_HZ ZETA K_N_PER_M (repeatable) "
+                         "or --frf FILE.csv")
+    return chatter.modal_compliance(modes), f"{len(modes)} mode(s)"
+
+
+def run(args) -> int:
+    system, source = _compliance(args)
+    setup = chatter.MillingSetup(teeth=args.teeth, kt=args.kt, kn=args.kn,
+                                 radial_immersion=args.immersion, milling=args.milling)
+    required = None if args.required_depth_mm is None else args.required_depth_mm * MM
+    figure = args.out / f"lobes_{args.method}.png"
+    files = [] if args.no_plots else [figure]
+    report.check_writable(files, args.force)
+    count = args.speeds if args.speeds is not None else (2000 if args.method == "zoa" else 200)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        speeds = chatter.spindle_speeds(system, setup, args.speed_rpm, count,
+                                        direction=args.direction)
+        zoa = chatter.stability_lobes(system, setup, speeds, direction=args.direction,
+                                      lobes=args.lobes)
+        if args.method == "sdm":
+            depth_max = None if args.depth_max_mm is None else args.depth_max_mm * MM
+            result = chatter.sdm_lobes(system, setup, speeds, depth_max,
+                                       intervals=args.intervals, direction=args.direction)
+            shown = [result, zoa]
+        else:
+            result, shown = zoa, [zoa]
+    if files:
+        report.save_figure(plots.plot_stability_lobes(shown, required_depth=required),
+                           figure, args.force)
+    out = result.to_dict()
+    out["compliance"] = source
+    if args.method == "sdm":
+        out["zoa_b_crit_m"] = zoa.b_crit
+        out["zoa_critical_speed_rpm"] = zoa.critical_speed_rpm
+    if required is not None:
+        out["required_depth_m"] = required
+        out["margin"] = result.margin(required)
+    out["warnings"] = [str(w.message) for w in caught]
+    out["figures"] = [str(f) for f in files]
+    if args.json:
+        print_json(out)
+        return 0
+    name = {"zoa": "zero-order approximation",
+            "sdm": f"semi-discretisation ({result.intervals} intervals)"}[args.method]
+    print(f"stability lobes, {name}: {source}; {setup.teeth} teeth, a/D = "
+          f"{setup.radial_immersion:g}, {setup.milling}-milling, Kt = {setup.kt:g}, "
+          f"Kn = {setup.kn:g} N/m^2")
+    print(f"  speeds              : {result.speed_rpm[0]:.0f} .. {result.speed_rpm[-1]:.0f} rpm "
+          f"({result.speed_rpm.size})")
+    print(f"  b_crit              : {result.b_crit / MM:.4f} mm")
+    print(f"  critical speed      : {result.critical_speed_rpm:.1f} rpm")
+    if args.method == "zoa":
+        print(f"  chatter frequency   : {result.critical_frequency * HZ:.1f} Hz")
+    else:
+        print(f"  zero-order b_crit   : {zoa.b_crit / MM:.4f} mm "
+              f"at {zoa.critical_speed_rpm:.1f} rpm")
+    print(f"  lowest limit shown  : {result.min_depth_limit / MM:.4f} mm")
+    if out["speeds_without_limit"]:
+        print(f"  note: {out['speeds_without_limit']} speeds have no limit below the depths "
+              "examined")
+    if required is not None:
+        print(f"  margin at {required / MM:g} mm : {out['margin']:.3f} "
+              f"({'stable' if out['margin'] > 1 else 'chatter'} at the worst speed)")
+    for message in out["warnings"]:
+        print(f"  warning: {message}")
+    for f in files:
+        print(f"  wrote {f}")
+    return 0

@@ -1,0 +1,81 @@
+"""``servotune modes``: natural frequencies of an axis and each mode's share of work-piece X.
+
+The share (``wp_x_participation``) of mode j is its part of the static compliance at the
+work-piece X DOF: phi_j(wp.x)^2 / omega_j^2 over the sum of the same for every flexible mode
+(phi mass-normalised). The shares add up to 1; rigid-body modes get 0. The mode with the
+largest share is the one that moves the work piece in X.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..axis import load_axis
+from ._common import add_output_options, print_json
+
+__all__ = ["add_parser", "run"]
+
+HZ = 1.0 / (2.0 * math.pi)
+WP_X = "wp.x"
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "modes", help="natural frequencies and each mode's share of work-piece X motion",
+        description="Natural frequencies of the axis structure and, per mode, its share of "
+                    "work-piece X motion: phi_j(wp.x)^2/omega_j^2 over the sum over all "
+                    "flexible modes (phi mass-normalised), i.e. the mode's part of the static "
+                    "compliance at wp.x; shares add up to 1, rigid-body modes get 0. Also the "
+                    "peak work-piece X compliance over [requirements] band_hz (default "
+                    "5-300 Hz) when the configuration has no rigid-body mode.")
+    p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
+    p.add_argument("--pads", choices=("locked", "free"), default="free",
+                   help="guide-way pads held (stiction at standstill) or free (default free)")
+    p.add_argument("--motor", choices=("locked", "free"), default="free",
+                   help="motor rotor held (a stiff servo) or free (default free)")
+    p.add_argument("--count", type=int, default=None,
+                   help="show only the lowest COUNT modes in the text output")
+    add_output_options(p, default_out=None)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    axis = load_axis(args.axis)
+    model = axis.configuration(pads=args.pads, motor=args.motor)
+    omega = model.natural_frequencies()
+    zeta = model.modal_damping_ratios()
+    share = model.participation(WP_X)
+    j = int(share.argmax())
+    rigid = int((omega == 0).sum())
+    band = axis.requirements.get("band_hz", (5.0, 300.0))
+    peak = None
+    if rigid == 0:
+        w_peak, value = model.compliance_peak(WP_X, band[0] / HZ, band[1] / HZ)
+        peak = {"wp_x_peak_compliance": value, "wp_x_peak_hz": w_peak * HZ}
+    result = {
+        "axis": axis.name, "pads": args.pads, "motor": args.motor, "n_dofs": model.n,
+        "frequencies_hz": (omega * HZ).tolist(),
+        "damping_ratios": [None if math.isnan(z) else float(z) for z in zeta],
+        "wp_x_participation": share.tolist(),
+        "wp_x_mode": j + 1, "wp_x_mode_hz": float(omega[j] * HZ),
+        "rigid_body_modes": rigid,
+        "wp_x_peak_compliance": None if peak is None else peak["wp_x_peak_compliance"],
+        "wp_x_peak_hz": None if peak is None else peak["wp_x_peak_hz"],
+    }
+    if args.json:
+        print_json(result)
+        return 0
+    print(f"{axis.name}: pads {args.pads}, motor {args.motor}, {model.n} DOFs, "
+          f"{rigid} rigid-body mode(s)")
+    print("  mode    f [Hz]   zeta [%]   wp.x share [%]")
+    count = len(omega) if args.count is None else args.count
+    for i in range(min(count, len(omega))):
+        z = "      -" if math.isnan(zeta[i]) else f"{100 * zeta[i]:7.2f}"
+        mark = "  <- work piece X" if i == j else ""
+        print(f"  {i + 1:4d} {omega[i] * HZ:9.2f}  {z}   {100 * share[i]:10.2f}{mark}")
+    print(f"  work-piece X mode: {omega[j] * HZ:.2f} Hz ({100 * share[j]:.1f} % of the static "
+          "compliance at wp.x)")
+    if peak is not None:
+        print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
+              f"{peak['wp_x_peak_hz']:.2f} Hz ({band[0]:g}-{band[1]:g} Hz)")
+    return 0

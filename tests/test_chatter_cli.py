@@ -1,0 +1,99 @@
+"""``servotune lobes`` in-process through ``main([...])``: both compliance forms and errors."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from servotune import chatter
+from servotune.cli import main
+
+MODE = ["--mode", "922", "0.011", str(0.03993 * (2 * math.pi * 922.0) ** 2)]
+
+
+def run_json(argv, capsys):
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_mode_form_zero_order(tmp_path, capsys):
+    out = run_json(["lobes", *MODE, "--speed-rpm", "5000", "25000", "--speeds", "500",
+                    "--required-depth-mm", "0.2", "--out", str(tmp_path), "--json"], capsys)
+    for key in ("b_crit_m", "critical_speed_rpm", "lobes", "margin", "critical_frequency_hz"):
+        assert key in out
+    assert set(out["lobes"]) == {"speed_rpm", "b_lim_m"}
+    assert len(out["lobes"]["speed_rpm"]) == len(out["lobes"]["b_lim_m"]) == 500
+    # Tlusty: b_crit Kt mu = 2 k zeta (1 + zeta), mu = N Kr / 4 in a full slot
+    k = 0.03993 * (2 * math.pi * 922.0) ** 2
+    mu = 2 * (2e8 / 6e8) / 4
+    assert out["b_crit_m"] * 6e8 * mu == pytest.approx(2 * k * 0.011 * 1.011, rel=1e-9)
+    assert out["margin"] == pytest.approx(out["min_depth_limit_m"] / 0.2e-3)
+    assert 5000 <= out["critical_speed_rpm"] <= 25000
+    assert (tmp_path / "lobes_zoa.png").stat().st_size > 10_000
+
+
+def test_frf_form_matches_the_mode_form(tmp_path, capsys):
+    system = chatter.modal_compliance([chatter.Mode.from_hz(922, 0.011, 1.34e6, "y")])
+    w, g = chatter.compliance_matrix(system, np.linspace(5000, 7000, 4001))
+    path = tmp_path / "frf.csv"
+    np.savetxt(path, np.column_stack([w / (2 * math.pi), g[:, 1, 1].real, g[:, 1, 1].imag]),
+               delimiter=",", header="f_hz,re_yy_m_per_n,im_yy_m_per_n", comments="")
+    args = ["--speed-rpm", "12000", "20000", "--no-plots", "--json"]
+    from_frf = run_json(["lobes", "--frf", str(path), *args], capsys)
+    from_mode = run_json(["lobes", "--mode", "922", "0.011", "1.34e6", "--direction", "y",
+                          *args], capsys)
+    assert from_frf["b_crit_m"] == pytest.approx(from_mode["b_crit_m"], rel=1e-5)
+    assert from_frf["critical_speed_rpm"] == pytest.approx(from_mode["critical_speed_rpm"],
+                                                           rel=1e-3)
+
+
+def test_semi_discretisation_form(tmp_path, capsys):
+    out = run_json(["lobes", *MODE, "--method", "sdm", "--immersion", "0.05",
+                    "--speed-rpm", "17500", "19000", "--speeds", "7", "--intervals", "30",
+                    "--depth-max-mm", "3", "--out", str(tmp_path), "--json"], capsys)
+    assert out["method"] == "sdm" and out["intervals"] == 30
+    # flip lobe below the zero-order limit
+    assert out["b_crit_m"] < 0.7 * out["zoa_b_crit_m"]
+    assert (tmp_path / "lobes_sdm.png").stat().st_size > 10_000
+
+
+def test_text_output_with_two_directions(capsys):
+    assert main(["lobes", *MODE, "--mode-y", "1100", "0.02", "2e6", "--teeth", "4",
+                 "--immersion", "0.3", "--milling", "up", "--no-plots"]) == 0
+    text = capsys.readouterr().out
+    assert "b_crit" in text and "critical speed" in text and "2 mode(s)" in text
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["lobes", "axis_x"], "axis models are not available yet"),
+    (["lobes"], "give the compliance"),
+    (["lobes", *MODE, "--immersion", "1.5"], "radial_immersion"),
+    (["lobes", *MODE, "--kt=-6e8"], "kt"),
+    (["lobes", "--mode", "922", "1.5", "1e6"], "damping_ratio"),
+    (["lobes", *MODE, "--speed-rpm", "9000", "5000"], "speed range"),
+    (["lobes", *MODE, "--speeds", "0"], "number of speeds"),
+    (["lobes", "--frf", "missing.csv"], "missing.csv"),
+])
+def test_bad_input_is_a_clear_error(argv, words, capsys, tmp_path):
+    assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 1
+    assert words in capsys.readouterr().err
+
+
+def test_measured_frf_with_semi_discretisation_is_refused(tmp_path, capsys):
+    path = tmp_path / "frf.csv"
+    f = np.linspace(800, 1000, 50)
+    h = 1 / (1.34e6 * (1 - (f / 922) ** 2 + 2j * 0.011 * f / 922))
+    np.savetxt(path, np.column_stack([f, h.real, h.imag]), delimiter=",",
+               header="f_hz,re_xx_m_per_n,im_xx_m_per_n", comments="")
+    assert main(["lobes", "--frf", str(path), "--method", "sdm", "--no-plots"]) == 1
+    assert "state-space" in capsys.readouterr().err
+
+
+def test_existing_figure_is_not_overwritten(tmp_path, capsys):
+    target = tmp_path / "lobes_zoa.png"
+    target.write_bytes(b"keep me")
+    assert main(["lobes", *MODE, "--out", str(tmp_path)]) == 1
+    assert "--force" in capsys.readouterr().err and target.read_bytes() == b"keep me"
+    assert main(["lobes", *MODE, "--out", str(tmp_path), "--force"]) == 0
+    assert target.read_bytes() != b"keep me"
