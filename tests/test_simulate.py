@@ -222,3 +222,13 @@ def test_custom_scenario_and_sinusoid_follow_the_reference():
     r2 = simulate(lugre_axis(), dataclasses.replace(sinusoid(10e-6, 0.5), duration=1.0))
     assert r2["x_ref"].max() == pytest.approx(20e-6, rel=1e-3)
     assert math.isfinite(r2.energies(0.5, 1.0).relative_residual)
+
+
+def test_figures_are_drawn(tmp_path):
+    from servotune import plots
+    r = simulate(lugre_axis(), sine_sweep(3000.0, 90.0, 130.0, 0.6))
+    for kind in ("envelope", "energies", "hysteresis"):
+        fig = r.plot(kind)
+        assert fig.axes[0].has_data()
+        fig.savefig(tmp_path / f"{kind}.png")
+    assert plots.plot_sweep_envelope([r.sweep_envelope()], labels=["lg"]).axes

@@ -12,7 +12,11 @@ too. An exponential integrator makes the first exact for any step; Radau colloca
 second L-stable; and because the nonlinearity enters through one input per pad, the implicit
 equations are of size 2 n_pads whatever the size of the model. Compiled with numba, a step of
 the paper's 41-DOF axis takes microseconds, and the step is chosen for the excitation (tens of
-steps per cycle at 100 Hz), not for the stiffness. ``benchmarks/simulate_sweep.py`` compares it
+steps per cycle at 100 Hz), not for the stiffness; an error estimate (the curvature of the
+friction remainder over the step, propagated to the pad motion) halves it where the friction
+needs it. casadi's CVODES on the same model was not chosen: a variable-order BDF with a dense
+n x n Newton matrix restarts at every velocity reversal of the pads and cannot use the rank-n_pads
+structure. ``benchmarks/simulate_sweep.py`` compares it
 with scipy's ``solve_ivp`` (LSODA; Radau with the analytic Jacobian) at equal accuracy.
 """
 
@@ -111,8 +115,13 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     scenario : Scenario
         See :mod:`servotune.simulate.scenario` (sine sweeps, moves, sinusoids, circles, custom).
     step : float
-        Integration step [s]. The linear dynamics are exact for any step; the step resolves the
-        excitation and the friction (default 1e-4 s; the convergence tests show the error).
+        Base integration step [s] (default 2.5e-4 s, 40 steps per cycle at 100 Hz). The linear
+        dynamics are exact for any step; the step resolves the excitation. Where the friction
+        needs it (break-away, reversals, stick-slip) steps are halved, down to step/256.
+    tolerance : float
+        Local error allowed per step in the pad motion, relative to the Stribeck velocity vs
+        and the presliding deflection Fs/sigma0 (default 1e-4: window energies within 0.1 %
+        of a tight reference in the tests).
     record_step : float
         Interval of the recorded histories [s], a multiple of ``step``.
     window : sequence of float
@@ -128,7 +137,7 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     Raises
     ------
     SimulationError
-        When a step cannot be completed even at 1/64 of its length; the exception carries the
+        When a step cannot be completed even at 1/256 of its length; the exception carries the
         partial result (``.result``) and the time reached (``.time``).
     ValueError
         Bad arguments (unknown force DOF, record step not a multiple of the step, ...).
