@@ -14,9 +14,8 @@ equations are of size 2 n_pads whatever the size of the model. Compiled with num
 the paper's 41-DOF axis takes microseconds, and the step is chosen for the excitation (tens of
 steps per cycle at 100 Hz), not for the stiffness; an error estimate (the curvature of the
 friction remainder over the step, propagated to the pad motion) halves it where the friction
-needs it. casadi's CVODES on the same model was not chosen: a variable-order BDF with a dense
-n x n Newton matrix restarts at every velocity reversal of the pads and cannot use the rank-n_pads
-structure. ``benchmarks/simulate_sweep.py`` compares it
+needs it. (casadi's CVODES was considered but not measured: a BDF solver would work with a dense
+n x n Newton matrix and could not use the rank-n_pads structure of the nonlinearity.) ``benchmarks/simulate_sweep.py`` compares it
 with scipy's ``solve_ivp`` (LSODA; Radau with the analytic Jacobian) at equal accuracy.
 """
 
