@@ -91,7 +91,7 @@ class ViscousFriction(PadFriction):
 
     Examples
     --------
-    >>> ViscousFriction(5578.0).pad_block("pad1.x", 4).D[0, 0]   # force on the pad DOF per v
+    >>> float(ViscousFriction(5578.0).pad_block("pad1.x", 4).D[0, 0])   # pad force per velocity
     -1394.5
     """
 
