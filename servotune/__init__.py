@@ -92,6 +92,26 @@ from .twomass import (
     two_mass_compliance,
 )
 
+# simulate
+from .simulate import (
+    LuGreFriction,
+    NonlinearAxis,
+    PadFriction,
+    Scenario,
+    SimulationError,
+    SimulationResult,
+    SweepEnvelope,
+    ViscousFriction,
+    WindowEnergies,
+    circle,
+    constant_speed,
+    point_to_point,
+    sine_sweep,
+    sinusoid,
+)
+
+# (the function is servotune.simulate.simulate: the name servotune.simulate stays the package)
+
 __version__ = "0.1.0"
 
 __all__ = [
@@ -182,4 +202,19 @@ __all__ = [
     "sdm_lobes",
     "stability_lobes",
     "stability_map",
+    # simulate
+    "LuGreFriction",
+    "NonlinearAxis",
+    "PadFriction",
+    "Scenario",
+    "SimulationError",
+    "SimulationResult",
+    "SweepEnvelope",
+    "ViscousFriction",
+    "WindowEnergies",
+    "circle",
+    "constant_speed",
+    "point_to_point",
+    "sine_sweep",
+    "sinusoid",
 ]

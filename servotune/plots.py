@@ -16,13 +16,16 @@ from . import twomass
 __all__ = [
     "plot_bode",
     "plot_compliance",
+    "plot_energies",
     "plot_equivalent_damping",
     "plot_g_alpha",
     "plot_hysteresis",
+    "plot_pad_hysteresis",
     "plot_response_hysteresis",
     "plot_stability_lobes",
     "plot_stability_map",
     "plot_stribeck",
+    "plot_sweep_envelope",
     "plot_two_mass_compliance",
 ]
 
@@ -105,12 +108,6 @@ def plot_two_mass_compliance(analysis: twomass.TwoMassAnalysis, f_max_hz: float 
 
 # ---------------------------------------------------------------- friction (servotune.friction)
 
-__all__ += [
-    "plot_equivalent_damping",
-    "plot_hysteresis",
-    "plot_response_hysteresis",
-    "plot_stribeck",
-]
 
 UM_PER_M = 1e6
 
@@ -273,10 +270,6 @@ def plot_response_hysteresis(response, measured_force=None,
 
 # ------------------------------------------------------------------ chatter (servotune.chatter)
 
-__all__ += [
-    "plot_stability_lobes",
-    "plot_stability_map",
-]
 
 
 def _finite_or_nan(values) -> np.ndarray:
@@ -480,4 +473,73 @@ def plot_compliance(curves, title: str = "Work-piece compliance",
     ax_ph.set_xlabel("frequency [Hz]")
     ax_ph.set_yticks(np.arange(-180, 181, 90))
     ax_ph.grid(True, which="both", alpha=0.4)
+
+
+# ------------------------------------------------------------------------------------------
+# time simulation (servotune.simulate): sweep envelopes, energies, pad hysteresis
+
+
+
+def plot_sweep_envelope(envelopes, labels=None, reference=None, title=None) -> Figure:
+    """Work-piece oscillation per unit force along sine sweeps (the paper's Table 3 trials).
+
+    Parameters
+    ----------
+    envelopes : sequence of SweepEnvelope
+        From :meth:`servotune.simulate.SimulationResult.sweep_envelope`.
+    labels : sequence of str, optional
+    reference : dict, optional
+        ``{label: (omega [rad/s], |compliance| [m/N])}`` linear curves to draw dashed.
+    """
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.add_subplot()
+    labels = labels or [None] * len(envelopes)
+    for env, label in zip(envelopes, labels, strict=True):
+        line, = ax.plot(env.frequency * HZ_PER_RAD_S, env.amplitude, lw=1.6, label=label)
+        ax.plot([env.resonance_hz], [env.peak], "o", color=line.get_color(), ms=5)
+    for label, (omega, mag) in (reference or {}).items():
+        ax.plot(np.asarray(omega) * HZ_PER_RAD_S, np.abs(mag), "--", lw=1.0, label=label)
+    ax.set_xlabel("excitation frequency [Hz]")
+    ax.set_ylabel("work-piece oscillation / force [m/N]")
+    ax.set_title(title or "Sine sweep: first-harmonic envelope per cycle (dots: resonance)",
+                 fontsize=10)
+    ax.grid(True, alpha=0.4)
+    if any(labels) or reference:
+        ax.legend(fontsize=8)
+    return fig
+
+
+def plot_energies(result, title=None) -> Figure:
+    """Cumulative works done on the structure (force, motor, friction, damping) over time."""
+    names = ("external force", "motor", "guide-way friction", "structural damping")
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.add_subplot()
+    for k, name in enumerate(names):
+        ax.plot(result.t, result.work[:, k], lw=1.5, label=name)
+    ax.plot(result.checkpoints, result.structure_energy, "k:", lw=1.2,
+            label="kinetic + potential energy")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("work done on the structure [J]")
+    ax.set_title(title or f"Energies: {result.scenario}", fontsize=10)
+    ax.grid(True, alpha=0.4)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def plot_pad_hysteresis(result, pad: str, t_start: float = 0.0, t_end: float | None = None,
+                        title=None) -> Figure:
+    """Friction force against displacement of one guide-way pad (a hysteresis loop, Fig 2/8)."""
+    key = pad.replace(".", "_")
+    t_end = result.t[-1] if t_end is None else t_end
+    sel = (result.t >= t_start) & (result.t <= t_end)
+    x = result[key][sel]
+    force = result["F_" + key][sel]
+    fig = Figure(figsize=(6.0, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot(1e6 * (x - x[0]), force, lw=0.9, color="tab:blue")
+    ax.set_xlabel(f"{pad} displacement from t = {t_start:g} s [um]")
+    ax.set_ylabel(f"friction force at {pad} [N]")
+    ax.set_title(title or f"Pad hysteresis, {result.scenario}", fontsize=10)
+    ax.grid(True, alpha=0.4)
     return fig

@@ -14,7 +14,8 @@ import sys
 __all__ = ["main", "build_parser"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("twomass", "modes", "check", "friction", "bode", "compliance", "lobes")
+COMMANDS = ("twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "tune",
+            "table3", "verify")
 
 
 def build_parser() -> argparse.ArgumentParser:

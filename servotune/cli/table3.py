@@ -1,0 +1,112 @@
+"""``servotune table3 [AXIS]``: the paper's Table 3, simulated, beside the published one.
+
+Runs the 15 sine-sweep trials of Bianchi et al. (2014), sec 5.3 (LuGre standing still and at
+30 mm/s, viscous-only standing still; 50 ... 2000 N peak to peak; 10 -> 100 Hz in 20 s; energies
+over t = 2 .. 20 s) on an axis description, in parallel over ``--workers`` processes, prints the
+simulated table beside the paper's and checks the remarks A-C.
+"""
+
+from __future__ import annotations
+
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from ..simulate import table3 as t3
+from ..simulate.setup import axis_setup
+from ._common import add_output_options, print_json
+
+__all__ = ["add_parser", "run", "default_axis", "load_setup"]
+
+
+def default_axis() -> Path:
+    """The bundled paper axis, ``models/paper_x_axis`` of the source tree."""
+    return Path(__file__).resolve().parents[2] / "models" / "paper_x_axis"
+
+
+def load_setup(path):
+    """Load an axis description (``servotune.axis.load_axis``) and turn it into the set-up of
+    the simulation."""
+    try:
+        from ..axis import load_axis
+    except ImportError as exc:  # pragma: no cover - until servotune.axis is merged
+        raise RuntimeError("reading axis descriptions needs servotune.axis (load_axis), which "
+                           "this installation lacks") from exc
+    path = Path(path)
+    if not (path / "axis.toml").is_file():
+        raise FileNotFoundError(f"{path} has no axis.toml; give an axis folder such as "
+                                f"{default_axis()}")
+    return axis_setup(load_axis(path))
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "table3", help="simulate the paper's Table 3 (sine sweeps with LuGre friction)",
+        description="The 15 trials of Table 3 (Bianchi et al. 2014, sec 5.3): a force at the "
+                    "work piece swept 10 -> 100 Hz in 20 s at 50-2000 N peak to peak, LuGre "
+                    "friction standing still and at 30 mm/s, viscous-only pads standing still; "
+                    "energies over t = 2..20 s. Prints the result beside the paper's table and "
+                    "checks its remarks A-C.")
+    p.add_argument("axis", nargs="?", default=None,
+                   help="axis folder with axis.toml (default: the bundled models/paper_x_axis)")
+    p.add_argument("--workers", type=int, default=2,
+                   help="parallel processes (default 2; 1 runs in this process)")
+    p.add_argument("--duration", type=float, default=20.0,
+                   help="sweep time [s] (default 20; the window is the last 90 %%)")
+    p.add_argument("--f-start-hz", type=float, default=10.0, help="sweep start (default 10 Hz)")
+    p.add_argument("--f-end-hz", type=float, default=100.0, help="sweep end (default 100 Hz)")
+    p.add_argument("--quiet", action="store_true", help="no progress report on standard error")
+    add_output_options(p, default_out=None)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    if not args.duration > 0:
+        raise ValueError(f"--duration must be a positive number of seconds, got {args.duration}")
+    setup = load_setup(args.axis if args.axis is not None else default_axis())
+    settings = t3.SweepSettings(f_start_hz=args.f_start_hz, f_end_hz=args.f_end_hz,
+                                duration=args.duration,
+                                window=(0.1 * args.duration, args.duration))
+    show = not args.quiet and sys.stderr.isatty()
+
+    def progress(done, total):
+        sys.stderr.write(f"\r  trials done: {done}/{total}")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+    if args.workers == 1:
+        table = t3.table3(setup, None, settings=settings, progress=progress if show else None)
+    else:
+        with ProcessPoolExecutor(max_workers=args.workers) as pool:
+            table = t3.table3(setup, pool, settings=settings,
+                              progress=progress if show else None)
+    result = table.to_dict()
+    if args.json:
+        print_json(result)
+        return 0
+    paper = {(m, float(f), float(v)): r for m, f, v, *r in t3.PAPER_TABLE3}
+    s = settings
+    print(f"Table 3 on {table.axis}: force at wp.x swept {s.f_start_hz:g} -> {s.f_end_hz:g} Hz in "
+          f"{s.duration:g} s; energies over {s.window[0]:g}..{s.window[1]:g} s "
+          "(simulated | paper)")
+    print(f"{'#':>2} {'model':>5} {'F pp':>6} {'v':>6} | {'E fric [J]':>21} | {'E motor [J]':>21} |"
+          f" {'res [Hz]':>14} | {'osc/F [m/N]':>19}")
+    for i, r in enumerate(table.rows, 1):
+        ref = paper.get((r["model"], r["force_pp_n"], r["speed_m_per_s"]))
+        pe = (f"{ref[0]:>9.4g}", f"{ref[1]:>9.4g}", f"{ref[2]:>6}", f"{ref[3]:>8.3g}") if ref \
+            else ("", "", "", "")
+        print(f"{i:>2} {r['model']:>5} {r['force_pp_n']:>6g} {r['speed_m_per_s'] * 1e3:>4g}mm"
+              f" | {r['energy_friction_j']:>10.4g} {pe[0]:>10} | {r['energy_motor_j']:>10.4g} "
+              f"{pe[1]:>10} | {r['resonance_hz']:>6.1f} {pe[2]:>7} | "
+              f"{r['wp_oscillation_per_force_m_per_n']:>9.3g} {pe[3]:>9}")
+    refs = table.references
+    print("linear references in the band: "
+          + ", ".join(f"{k} {v['resonance_hz']:.1f} Hz ({v['compliance_m_per_n']:.3g} m/N)"
+                      for k, v in refs.items()))
+    for key, remark in table.remarks.items():
+        print(f"remark {key}: {'holds' if remark['holds'] else 'does NOT hold'} - "
+              f"{remark['detail']}")
+    return 0

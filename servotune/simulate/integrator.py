@@ -1,0 +1,514 @@
+"""Exponential collocation integrator for a linear system with a few stiff nonlinear inputs.
+
+The axis is ``dX/dt = A X + B_u u(t) + B_r r``, with one nonlinear input per pad,
+``r_p = r(v_p, z_p)`` (:mod:`servotune.simulate.system`). A holds the structure (with its high
+modes), the drive and the linearised contacts, including the bristle damper sigma1 that acts in
+microseconds on the pads; r holds what is left of the LuGre law, stiff while the pads slide
+(time constant g/(sigma0 |v|) ~ 1e-5 s). Both stiffnesses are handled without small steps:
+
+* **Linear part exactly** (exponential integrator): A = V diag(lambda) V^-1 once (after
+  balancing), so the flow over a step is a diagonal map, exact for any step however stiff the
+  modes; conjugate pairs are carried by one complex coordinate.
+* **Known inputs** u(t) are interpolated by the cubic through t, t + h/3, t + 2h/3, t + h and
+  integrated exactly against the exponential (phi-functions).
+* **Nonlinear inputs** by collocation at the Radau points c = 1/3, 1: r over the step is the
+  line through its values R_1, R_2 at the two stage times, and the stage states are::
+
+      xi(c_i h) = e^{lambda c_i h} xi_n + sum_k beta_ik(lambda) B_u u_k
+                  + sum_j alpha_ij(lambda) B_r R_j,    alpha_ij = int_0^{c_i h} e^{lambda
+                  (c_i h - s)} l_j(s) ds
+
+  The 2 n_pads unknowns R_j = r(y(c_j h)) are found by Newton's method on a system of that size
+  (the pads couple only through their outputs v_p, z_p), so a step costs O(n n_pads), not
+  O(n^2) or O(n^3). For the nonlinear part the scheme is the 2-stage Radau IIA collocation:
+  L-stable (the sliding bristles relax in one step without ringing) and stiffly accurate.
+* A step whose Newton iteration does not converge (e.g. at a violent break-away) is redone as
+  two half steps, recursively down to 1/64 of the step; below that the integration stops with
+  :class:`SimulationError`.
+
+The energies are integrated alongside: the power of the work-piece forces, of the motor torque,
+of the friction and of the distributed damping is evaluated at every step end and accumulated by
+the trapezoidal rule (its error is h^2/12 times the change of the power's derivative over the
+window, not growing with the number of cycles).
+
+References
+----------
+M. Hochbruck, A. Ostermann, "Exponential integrators", Acta Numerica 19 (2010) 209-286 (sec 2.3,
+exponential collocation; phi-functions).
+E. Hairer, G. Wanner, Solving Ordinary Differential Equations II, 2nd ed., Springer (1996),
+sec IV.5 (Radau IIA, L-stability, stiff accuracy).
+A. H. Al-Mohy, N. J. Higham, "Computing the action of the matrix exponential", SIAM J. Sci.
+Comput. 33 (2011) 488-511 (phi-functions from one exponential of an augmented matrix).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+import scipy.linalg
+
+from .contact import evaluate_remainder
+
+__all__ = ["ModalForm", "modal_form", "StepWeights", "step_weights", "phi_functions",
+           "integrate_chunk", "sum_of_squares", "MAX_LEVEL", "N_POWERS"]
+
+MAX_LEVEL = 8          # steps are halved at most this many times (h/256)
+C1 = 1.0 / 3.0         # first Radau point (the second is 1)
+N_POWERS = 4           # work-piece force, motor, friction, distributed damping
+MAX_NEWTON = 12
+
+
+def phi_functions(z, order: int = 4) -> np.ndarray:
+    """phi_1(z) ... phi_order(z) for complex z, shape z.shape + (order,).
+
+    ``phi_k(z) = int_0^1 e^{(1-s) z} s^(k-1)/(k-1)! ds = sum_j z^j / (j + k)!``: the Taylor
+    series for |z| < 1 (where the recurrence would cancel), else the recurrence
+    ``phi_{k+1}(z) = (phi_k(z) - 1/k!) / z`` from phi_0 = e^z (Hochbruck and Ostermann 2010,
+    sec 2.1), which loses at most a few digits of the last place for |z| >= 1.
+
+    Examples
+    --------
+    >>> phi = phi_functions(np.array([0.0, -50.0]))
+    >>> np.round(phi[0].real, 6).tolist()             # 1/k! at z = 0
+    [1.0, 0.5, 0.166667, 0.041667]
+    >>> round(float(phi[1, 0].real), 6)               # (e^z - 1)/z
+    0.02
+    """
+    z = np.asarray(z, dtype=complex)
+    out = np.empty(z.shape + (order,), dtype=complex)
+    small = np.abs(z) < 1.0
+    zs = z[small]
+    for k in range(1, order + 1):
+        term = np.full(zs.shape, 1.0 / math.factorial(k), dtype=complex)
+        acc = term.copy()
+        for j in range(1, 30):
+            term = term * zs / (j + k)
+            acc += term
+        out[small, k - 1] = acc
+    zl = z[~small]
+    prev = np.exp(zl)
+    for k in range(1, order + 1):
+        prev = (prev - 1.0 / math.factorial(k - 1)) / zl
+        out[~small, k - 1] = prev
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class ModalForm:
+    """A = V diag(lambda) V^-1 with one coordinate per real eigenvalue or conjugate pair.
+
+    ``X = Re(vectors @ xi)`` (pairs carry a factor 2) and ``d xi/dt = lam xi + left @ (B w)``.
+    """
+
+    lam: np.ndarray
+    vectors: np.ndarray
+    left: np.ndarray
+    condition: float
+
+
+def modal_form(a: np.ndarray, times=(1e-4, 1e-2), check: float = 1e-7) -> ModalForm:
+    """Diagonalise a real A after balancing; check the flow against ``expm``.
+
+    Raises
+    ------
+    ValueError
+        When A is (nearly) defective, so that the modal flow e^{A t} differs from scipy's
+        ``expm`` by more than ``check`` (relative) at the given times [s] (the steps used).
+    """
+    a = np.asarray(a, dtype=float)
+    ab, (scale, _) = scipy.linalg.matrix_balance(a, permute=False, separate=True)
+    lam, v = np.linalg.eig(ab)
+    v = scale[:, None] * v                      # back to the unbalanced states
+    w = np.linalg.inv(v)
+    keep = lam.imag >= 0.0
+    mult = np.where(lam.imag > 0.0, 2.0, 1.0)
+    real = lam.imag == 0.0
+    v[:, real] = v[:, real].real
+    w[real] = w[real].real
+    vb = v / scale[:, None]
+    cond = float(np.linalg.norm(vb, 1) * np.linalg.norm(np.linalg.inv(vb), 1))
+    form = ModalForm(lam=lam[keep].copy(), vectors=(v * mult)[:, keep].copy(),
+                     left=w[keep].copy(), condition=cond)
+    # a posteriori: the flow over the given times against expm
+    for t in times:
+        ref = scipy.linalg.expm(a * t)
+        got = (form.vectors * np.exp(form.lam * t)) @ form.left
+        err = np.abs(got.real - ref).max() / max(np.abs(ref).max(), 1e-300)
+        if not err <= check:
+            raise ValueError(
+                f"the linear part of the axis is too close to defective for the modal "
+                f"integrator (flow error {err:.2g} at t = {t:.3g} s, eigenvector condition "
+                f"{cond:.3g}); perturb the model slightly (e.g. damping) or report the model")
+    return form
+
+
+@dataclass(frozen=True, eq=False)
+class StepWeights:
+    """Exponential and collocation weights of steps h / 2^L, L = 0..levels.
+
+    Shapes (m modes): ``prop (L, 2, m)`` = e^{lambda c_i h}; ``alpha (L, 2, 2, m)``;
+    ``beta (L, 2, 4, m)``; ``gamma (L, m)`` the weight of the error term; ``kmat (L, 2, 2,
+    2 n_r, n_r)`` = Re(C_y diag(alpha_ij) B_r); ``kerr (L, 2 n_r, n_r)`` = Re(C_y diag(gamma)
+    B_r).
+    """
+
+    h: float
+    prop: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
+    gamma: np.ndarray
+    kmat: np.ndarray
+    kerr: np.ndarray
+
+
+def _lagrange_coefficients(nodes: np.ndarray) -> np.ndarray:
+    """Coefficients c[j, q] of the Lagrange basis l_j(x) = sum_q c[j, q] x^q on the nodes."""
+    van = np.vander(nodes, len(nodes), increasing=True)   # van[i, q] = nodes_i^q
+    return np.linalg.inv(van).T
+
+
+def step_weights(lam: np.ndarray, h: float, cy_br=None, levels: int = MAX_LEVEL) -> StepWeights:
+    """Weights for steps h/2^L (see :class:`StepWeights` and the module docstring).
+
+    ``cy_br = (C_y V (2 n_r, m), V^-1 B_r (m, n_r))`` for the nonlinear inputs, or None.
+
+    The error weight gamma = int_0^h e^{lambda (h - s)} (s/h - 1/3)(s/h - 1) ds propagates the
+    deviation of r from its line through the stage values, ``e(s) = r''/2 (s - h/3)(s - h)``,
+    to the end of the step.
+    """
+    lam = np.asarray(lam, dtype=complex)
+    m = lam.size
+    cu = _lagrange_coefficients(np.array([0.0, 1 / 3, 2 / 3, 1.0]))   # in s/h
+    cw = _lagrange_coefficients(np.array([C1, 1.0]))
+    quad = np.array([1.0 / 3.0, -4.0 / 3.0, 1.0])    # (x - 1/3)(x - 1) = 1/3 - 4/3 x + x^2
+    prop = np.empty((levels + 1, 2, m), dtype=complex)
+    alpha = np.empty((levels + 1, 2, 2, m), dtype=complex)
+    beta = np.empty((levels + 1, 2, 4, m), dtype=complex)
+    gamma = np.empty((levels + 1, m), dtype=complex)
+    for lev in range(levels + 1):
+        hl = h / 2**lev
+        for i, c in enumerate((C1, 1.0)):
+            t = c * hl
+            phi = phi_functions(lam * t)                         # (m, 4)
+            # int_0^t e^{lam (t - s)} (s/hl)^q ds = t^(q+1) q! phi_{q+1}(lam t) / hl^q
+            mono = np.stack([t ** (q + 1) * math.factorial(q) * phi[:, q] / hl**q
+                             for q in range(4)], axis=0)         # (4, m)
+            prop[lev, i] = np.exp(lam * t)
+            beta[lev, i] = cu @ mono
+            alpha[lev, i] = cw @ mono[:2]
+            if i == 1:
+                gamma[lev] = quad @ mono[:3]
+    nr = 0 if cy_br is None else cy_br[1].shape[1]
+    kmat = np.zeros((levels + 1, 2, 2, 2 * nr, nr))
+    kerr = np.zeros((levels + 1, 2 * nr, nr))
+    if nr:
+        cy, br = cy_br
+        for lev in range(levels + 1):
+            for i in range(2):
+                for j in range(2):
+                    kmat[lev, i, j] = ((cy * alpha[lev, i, j][None, :]) @ br).real
+            kerr[lev] = ((cy * gamma[lev][None, :]) @ br).real
+    return StepWeights(h=h, prop=prop, alpha=alpha, beta=beta, gamma=gamma, kmat=kmat,
+                       kerr=kerr)
+
+
+# ------------------------------------------------------------------------------------------
+# the compiled kernel (complex numbers carried as separate real and imaginary arrays)
+
+# reassociation lets the compiler vectorise the sums; NaN and infinity stay honoured (the
+# kernel checks for them)
+_FAST = {"reassoc", "contract", "arcp", "nsz"}
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _u_into(samples, s, out):
+    """Known inputs at position s (in sample units) into out: the sample itself on a sample,
+    else the cubic through the four samples around s."""
+    n = samples.shape[0]
+    nu = samples.shape[1]
+    i = int(math.floor(s))
+    if s == i and 0 <= i < n:
+        for c in range(nu):
+            out[c] = samples[i, c]
+        return
+    i0 = min(max(i - 1, 0), n - 4)
+    x = s - i0
+    for c in range(nu):
+        out[c] = 0.0
+    for a in range(4):
+        wgt = 1.0
+        for b in range(4):
+            if b != a:
+                wgt *= (x - b) / (a - b)
+        for c in range(nu):
+            out[c] += wgt * samples[i0 + a, c]
+
+
+@numba.njit(cache=True)
+def _solve_small(a, x, n):
+    """Solve a[:n, :n] x = x in place (Gaussian elimination with partial pivoting; a is
+    overwritten). Returns False for a singular matrix."""
+    for k in range(n):
+        p = k
+        big = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                big = abs(a[i, k])
+                p = i
+        if big == 0.0 or not math.isfinite(big):
+            return False
+        if p != k:
+            for j in range(n):
+                tmp = a[k, j]
+                a[k, j] = a[p, j]
+                a[p, j] = tmp
+            tmp = x[k]
+            x[k] = x[p]
+            x[p] = tmp
+        for i in range(k + 1, n):
+            f = a[i, k] / a[k, k]
+            if f != 0.0:
+                for j in range(k, n):
+                    a[i, j] -= f * a[k, j]
+                x[i] -= f * x[k]
+    for k in range(n - 1, -1, -1):
+        acc = x[k]
+        for j in range(k + 1, n):
+            acc -= a[k, j] * x[j]
+        x[k] = acc / a[k, k]
+    return True
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def sum_of_squares(rows_re, rows_im, xr, xm):
+    """sum_q (Re(rows[q] . xi))^2 for xi = xr + i xm (energies at checkpoints)."""
+    total = 0.0
+    for q in range(rows_re.shape[0]):
+        acc = 0.0
+        for i in range(xr.size):
+            acc += rows_re[q, i] * xr[i] - rows_im[q, i] * xm[i]
+        total += acc * acc
+    return total
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def _powers(xr, xm, u, r2, cp_re, cp_im, dpu, dpr, n_force, force_idx, n_pads, vals, out):
+    """Powers [W] at one instant: work-piece forces, motor, friction, damping."""
+    npr = cp_re.shape[0]
+    m = xr.size
+    for q in range(npr):
+        acc = 0.0
+        for i in range(m):
+            acc += cp_re[q, i] * xr[i] - cp_im[q, i] * xm[i]
+        for c in range(u.size):
+            acc += dpu[q, c] * u[c]
+        for p in range(r2.size):
+            acc += dpr[q, p] * r2[p]
+        vals[q] = acc
+    p_ext = 0.0
+    for f in range(n_force):
+        p_ext += u[force_idx[f]] * vals[f]
+    p_fric = 0.0
+    b = n_force + 2
+    for p in range(n_pads):
+        p_fric -= vals[b + p] * vals[b + n_pads + p]
+    p_damp = 0.0
+    for q in range(b + 2 * n_pads, npr):
+        p_damp -= vals[q] * vals[q]
+    out[0] = p_ext
+    out[1] = vals[n_force] * vals[n_force + 1]
+    out[2] = p_fric
+    out[3] = p_damp
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
+                    bu_re, bu_im, br_re, br_im, cy_re, cy_im, prop_re, prop_im, alpha_re,
+                    alpha_im, beta_re, beta_im, kmat, kerr, law, rparams, r_tol,
+                    err_scale, tol, cp_re, cp_im, dpu, dpr, n_force, force_idx, n_pads,
+                    co_re, co_im, dou, dor, rec_out, rec_energy, stats):
+    """Integrate the base steps n0..n1-1 (of length h) in place.
+
+    State: modal coordinates ``xr + i xm``, the last stage remainders ``r_last`` (2 n_r),
+    cumulative works ``energy`` (4) and current powers ``power`` (4); ``level`` is the current
+    step level (step h / 2^level). Records (outputs and works) are taken at the end of every
+    base step n with (n + 1) % record_every == 0. ``stats``: [steps, Newton iterations,
+    rejected steps, deepest level].
+
+    Returns (base steps completed, level): fewer steps than asked means a step failed at the
+    deepest level.
+    """
+    m = xr.size
+    nu = samples.shape[1]
+    nr = br_re.shape[1]
+    ny = 2 * nr
+    nlev = prop_re.shape[0]
+    top = nlev - 1
+    unit = 1 << top                     # finest steps per base step
+    # workspace
+    un = np.empty((4, nu))
+    bun_re = np.empty((4, m))
+    bun_im = np.empty((4, m))
+    base_re = np.empty((2, m))
+    base_im = np.empty((2, m))
+    ypred = np.empty((2, ny))
+    y = np.empty((2, ny))
+    rr = np.empty(2 * nr)
+    res = np.empty(2 * nr)
+    jac = np.empty((2 * nr, 2 * nr))
+    dv = np.empty(2 * nr)
+    dz = np.empty(2 * nr)
+    d2 = np.empty(nr)
+    u_end = np.empty(nu)
+    vals = np.empty(cp_re.shape[0])
+    p_new = np.empty(4)
+    n_rec = 0
+    pos = n0 * unit
+    end = n1 * unit
+    while pos < end:
+        lev = level
+        span = 1 << (top - lev)
+        s0 = pos * 3.0 / unit
+        ds = 1.0 / (1 << lev)
+        # known inputs projected on the modes at the four nodes
+        for k in range(4):
+            _u_into(samples, s0 + k * ds, un[k])
+            for i in range(m):
+                acc_r = 0.0
+                acc_i = 0.0
+                for c in range(nu):
+                    acc_r += bu_re[i, c] * un[k, c]
+                    acc_i += bu_im[i, c] * un[k, c]
+                bun_re[k, i] = acc_r
+                bun_im[k, i] = acc_i
+        for st in range(2):
+            for i in range(m):
+                pr = prop_re[lev, st, i]
+                pi = prop_im[lev, st, i]
+                ar = pr * xr[i] - pi * xm[i]
+                ai = pr * xm[i] + pi * xr[i]
+                for k in range(4):
+                    wr = beta_re[lev, st, k, i]
+                    wi = beta_im[lev, st, k, i]
+                    ar += wr * bun_re[k, i] - wi * bun_im[k, i]
+                    ai += wr * bun_im[k, i] + wi * bun_re[k, i]
+                base_re[st, i] = ar
+                base_im[st, i] = ai
+        ok = True
+        its = 0
+        err = 0.0
+        if nr > 0:
+            for st in range(2):
+                for q in range(ny):
+                    acc = 0.0
+                    for i in range(m):
+                        acc += cy_re[q, i] * base_re[st, i] - cy_im[q, i] * base_im[st, i]
+                    ypred[st, q] = acc
+            for p in range(nr):           # start from the last value of r
+                rr[p] = r_last[nr + p]
+                rr[nr + p] = r_last[nr + p]
+            ok = False
+            while its < MAX_NEWTON:
+                its += 1
+                for st in range(2):
+                    for q in range(ny):
+                        acc = ypred[st, q]
+                        for sj in range(2):
+                            for p in range(nr):
+                                acc += kmat[lev, st, sj, q, p] * rr[sj * nr + p]
+                        y[st, q] = acc
+                for st in range(2):
+                    for p in range(nr):
+                        row = st * nr + p
+                        val, a_v, a_z = evaluate_remainder(law, y[st, p], y[st, nr + p], rparams)
+                        res[row] = val - rr[row]
+                        dv[row] = a_v
+                        dz[row] = a_z
+                for st in range(2):
+                    for p in range(nr):
+                        row = st * nr + p
+                        for sj in range(2):
+                            for pp in range(nr):
+                                jac[row, sj * nr + pp] = -(
+                                    dv[row] * kmat[lev, st, sj, p, pp]
+                                    + dz[row] * kmat[lev, st, sj, nr + p, pp])
+                        jac[row, row] += 1.0
+                if not _solve_small(jac, res, 2 * nr):
+                    break
+                big = 0.0
+                finite = True
+                for q in range(2 * nr):
+                    rr[q] += res[q]
+                    if not math.isfinite(rr[q]):
+                        finite = False
+                    big = max(big, abs(res[q]))
+                if not finite:
+                    break
+                if big <= r_tol:
+                    ok = True
+                    break
+            if ok:
+                # error estimate: r minus its line, propagated to the pad outputs
+                for p in range(nr):
+                    d2[p] = 1.5 * (rr[nr + p] - 3.0 * rr[p] + 2.0 * r_last[nr + p])
+                for q in range(ny):
+                    acc = 0.0
+                    for p in range(nr):
+                        acc += kerr[lev, q, p] * d2[p]
+                    err = max(err, abs(acc) / err_scale[q])
+                err /= tol
+        stats[1] += its
+        if not ok or err > 1.0:
+            stats[2] += 1
+            if lev >= top:
+                return pos // unit - n0, level
+            level = lev + 1
+            continue
+        # accept: the new state
+        for i in range(m):
+            ar = base_re[1, i]
+            ai = base_im[1, i]
+            for sj in range(2):
+                wr = alpha_re[lev, 1, sj, i]
+                wi = alpha_im[lev, 1, sj, i]
+                for p in range(nr):
+                    g = rr[sj * nr + p]
+                    ar += (wr * br_re[i, p] - wi * br_im[i, p]) * g
+                    ai += (wr * br_im[i, p] + wi * br_re[i, p]) * g
+            xr[i] = ar
+            xm[i] = ai
+        for q in range(2 * nr):
+            r_last[q] = rr[q]
+        stats[0] += 1
+        if lev > stats[3]:
+            stats[3] = lev
+        pos += span
+        for c in range(nu):
+            u_end[c] = un[3, c]
+        _powers(xr, xm, u_end, r_last[nr:], cp_re, cp_im, dpu, dpr, n_force, force_idx,
+                n_pads, vals, p_new)
+        dt = h / (1 << lev)
+        for q in range(4):
+            energy[q] += 0.5 * dt * (power[q] + p_new[q])
+            power[q] = p_new[q]
+        # coarser next time if the error allows and the position is aligned
+        if nr > 0 and lev > 0 and err < 0.0625 and pos % (2 * span) == 0:
+            level = lev - 1
+        if pos % unit == 0:
+            n = pos // unit - 1
+            if (n + 1) % record_every == 0:
+                for q in range(co_re.shape[0]):
+                    acc = 0.0
+                    for i in range(m):
+                        acc += co_re[q, i] * xr[i] - co_im[q, i] * xm[i]
+                    for c in range(nu):
+                        acc += dou[q, c] * u_end[c]
+                    for p in range(nr):
+                        acc += dor[q, p] * r_last[nr + p]
+                    rec_out[n_rec, q] = acc
+                for q in range(4):
+                    rec_energy[n_rec, q] = energy[q]
+                n_rec += 1
+    return n1 - n0, level

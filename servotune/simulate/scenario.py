@@ -1,0 +1,280 @@
+"""Scenarios of the time simulation: references of the position loop and forces at the work piece.
+
+A :class:`Scenario` gives, as vectorised functions of time, the position reference with its
+velocity and acceleration (``x_ref``, ``v_ref``, ``a_ref``; the last two feed the drive's
+feed-forwards) and the forces at the work-piece DOFs. Constructors cover the paper's trials:
+
+* :func:`sine_sweep`: a force at the work piece swept linearly in frequency (Table 3: 10 -> 100 Hz
+  in 20 s, amplitude given peak to peak), standing still or with the axis moving at constant
+  speed (the paper's "imposed motion speed": a position ramp with velocity feed-forward);
+* :func:`constant_speed`, :func:`point_to_point` (moves and reversals), :func:`sinusoid` and
+  :func:`circle` (Fig 2, Fig 8: a 10 um sinusoid of 3.7 s period; circles of 20 and 5 um
+  radius, whose X component the axis follows);
+* :func:`custom`: any user-given reference and force functions.
+
+Motions start from rest: a constant speed is reached by a smooth start (velocity
+``V (3 s^2 - 2 s^3)``, s = t/t_start), so that the reference has no velocity step.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Scenario", "sine_sweep", "constant_speed", "point_to_point", "sinusoid", "circle",
+           "custom", "sweep_phase", "sweep_frequency"]
+
+HZ = 1.0 / (2.0 * math.pi)
+DEFAULT_START = 0.2   # [s] smooth start to a constant speed
+
+
+def _positive(name, value, allow_zero=False):
+    value = float(value)
+    if not math.isfinite(value) or value < 0.0 or (value == 0.0 and not allow_zero):
+        need = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be finite and {need}, got {value!r}")
+    return value
+
+
+def _zero(t):
+    return np.zeros_like(np.asarray(t, dtype=float))
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """Reference and force histories for :func:`servotune.simulate.simulate` (SI).
+
+    Parameters
+    ----------
+    duration : float
+        End time [s] (the simulation starts at rest at t = 0).
+    motion : callable, optional
+        ``motion(t) -> (x_ref, v_ref, a_ref)`` arrays [m, m/s, m/s^2]; None: hold at 0.
+    forces : dict, optional
+        ``{dof: force(t)}`` [N] at work-piece DOFs (``"wp.x"``, ``"wp.y"``, ``"wp.z"``).
+    speed : float
+        Nominal sliding speed [m/s] of the guide ways, about which the friction law is
+        linearised (0 standing still). Only the split of the law changes, not the model.
+    name : str
+        A label for reports.
+    sweep : tuple, optional
+        ``(f_start_hz, f_end_hz, t_start, t_end, amplitude)`` of a linear sine sweep of the
+        force, which :meth:`SimulationResult.sweep_envelope` uses.
+    """
+
+    duration: float
+    motion: Callable | None = None
+    forces: dict = field(default_factory=dict)
+    speed: float = 0.0
+    name: str = "custom"
+    sweep: tuple | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "duration", _positive("Scenario.duration", self.duration))
+        speed = float(self.speed)
+        if not math.isfinite(speed):
+            raise ValueError(f"Scenario.speed must be finite, got {self.speed!r}")
+        object.__setattr__(self, "speed", speed)
+        forces = dict(self.forces)
+        for dof, fun in forces.items():
+            if not callable(fun):
+                raise ValueError(f"the force at {dof!r} must be a function of time t [s] -> N")
+        object.__setattr__(self, "forces", forces)
+        if self.motion is not None and not callable(self.motion):
+            raise ValueError("motion must be a function t -> (x_ref, v_ref, a_ref)")
+
+    def signals(self, t) -> dict[str, np.ndarray]:
+        """The input signals on the times t, keyed by plant input name (zero ones left out)."""
+        t = np.asarray(t, dtype=float)
+        out = {}
+        if self.motion is not None:
+            x, v, a = (np.broadcast_to(np.asarray(s, dtype=float), t.shape)
+                       for s in self.motion(t))
+            for name, s in (("x_ref", x), ("v_ref", v), ("a_ref", a)):
+                if np.any(s != 0.0):
+                    out[name] = s
+        for dof, fun in self.forces.items():
+            s = np.broadcast_to(np.asarray(fun(t), dtype=float), t.shape)
+            out["f_" + dof.replace(".", "_")] = s
+        for name, s in out.items():
+            if not np.all(np.isfinite(s)):
+                raise ValueError(f"the scenario's {name} is not finite on [0, {self.duration}] s")
+        return out
+
+
+def sweep_phase(t, f_start_hz: float, f_end_hz: float, duration: float):
+    """Phase [rad] of a linear sweep: 2 pi (f0 t + (f1 - f0) t^2 / (2 T))."""
+    t = np.asarray(t, dtype=float)
+    return 2.0 * math.pi * (f_start_hz * t + 0.5 * (f_end_hz - f_start_hz) * t * t / duration)
+
+
+def sweep_frequency(t, f_start_hz: float, f_end_hz: float, duration: float):
+    """Instantaneous frequency [Hz] of a linear sweep: f0 + (f1 - f0) t / T."""
+    return f_start_hz + (f_end_hz - f_start_hz) * np.asarray(t, dtype=float) / duration
+
+
+def _smooth_start(speed: float, t_start: float):
+    """Motion at constant speed reached smoothly: v = V (3 s^2 - 2 s^3) for s = t/t_start < 1."""
+
+    def motion(t):
+        t = np.asarray(t, dtype=float)
+        if t_start == 0.0:
+            return speed * t, np.full_like(t, speed), np.zeros_like(t)
+        s = np.clip(t / t_start, 0.0, 1.0)
+        v = speed * (3 * s**2 - 2 * s**3)
+        a = speed * (6 * s - 6 * s**2) / t_start
+        x = np.where(t < t_start, speed * t_start * (s**3 - 0.5 * s**4),
+                     speed * (t - 0.5 * t_start))
+        return x, v, a
+
+    return motion
+
+
+def sine_sweep(force_pp: float, f_start_hz: float = 10.0, f_end_hz: float = 100.0,
+               duration: float = 20.0, speed: float = 0.0, dof: str = "wp.x",
+               start: float = DEFAULT_START) -> Scenario:
+    """A sine-sweep force at the work piece, standing still or moving (the paper's Table 3).
+
+    Parameters
+    ----------
+    force_pp : float
+        Force amplitude peak to peak [N] (the paper's 50 ... 2000 N).
+    f_start_hz, f_end_hz : float
+        Start and end frequency of the linear sweep [Hz] (default 10 and 100).
+    duration : float
+        Sweep time [s] (default 20).
+    speed : float
+        Constant axis speed [m/s] during the sweep (0: standing still; the paper's 30 mm/s is
+        0.03), reached by a smooth start over ``start`` seconds.
+    dof : str
+        Work-piece DOF of the force.
+
+    Examples
+    --------
+    >>> sc = sine_sweep(100.0)
+    >>> float(np.max(sc.forces["wp.x"](np.linspace(0, 20, 200001))))   # amplitude = pp / 2
+    50.0
+    """
+    force_pp = _positive("force_pp", force_pp)
+    f_start_hz = _positive("f_start_hz", f_start_hz)
+    f_end_hz = _positive("f_end_hz", f_end_hz)
+    duration = _positive("duration", duration)
+    amplitude = 0.5 * force_pp
+
+    def force(t):
+        return amplitude * np.sin(sweep_phase(t, f_start_hz, f_end_hz, duration))
+
+    motion = _smooth_start(float(speed), _positive("start", start, True)) if speed else None
+    label = (f"sine sweep {f_start_hz:g}-{f_end_hz:g} Hz in {duration:g} s, {force_pp:g} N "
+             f"p-p, {speed * 1e3:g} mm/s")
+    return Scenario(duration=duration, motion=motion, forces={dof: force}, speed=float(speed),
+                    name=label, sweep=(f_start_hz, f_end_hz, 0.0, duration, amplitude))
+
+
+def constant_speed(speed: float, duration: float, start: float = DEFAULT_START) -> Scenario:
+    """Move at constant speed [m/s] (reached by a smooth start over ``start`` s)."""
+    return Scenario(duration=duration, motion=_smooth_start(float(speed),
+                                                            _positive("start", start, True)),
+                    speed=float(speed), name=f"constant speed {speed * 1e3:g} mm/s")
+
+
+def point_to_point(points, speed: float, acceleration: float, dwell: float = 0.0,
+                   duration: float | None = None) -> Scenario:
+    """Moves through positions [m] with a trapezoidal velocity profile (reversals included).
+
+    Each move from ``points[i]`` to ``points[i+1]`` accelerates at ``acceleration`` [m/s^2] up
+    to ``speed`` [m/s] (or less on short moves), then dwells ``dwell`` seconds. The axis starts
+    at points[0] = its rest position (must be 0).
+    """
+    points = np.asarray(points, dtype=float)
+    if points.ndim != 1 or points.size < 2 or points[0] != 0.0:
+        raise ValueError("points must list at least two positions [m], starting at 0")
+    speed = _positive("speed", speed)
+    acc = _positive("acceleration", acceleration)
+    dwell = _positive("dwell", dwell, True)
+    segs = []   # (t0, x0, direction, t_acc, v_peak, t_flat)
+    t0 = 0.0
+    for x0, x1 in zip(points[:-1], points[1:], strict=True):
+        dist = abs(x1 - x0)
+        vp = min(speed, math.sqrt(dist * acc))
+        ta = vp / acc
+        tf = (dist - vp * ta) / vp if vp > 0 else 0.0
+        segs.append((t0, x0, math.copysign(1.0, x1 - x0), ta, vp, tf))
+        t0 += 2 * ta + tf + dwell
+    total = t0 if duration is None else _positive("duration", duration)
+    starts = np.array([seg[0] for seg in segs])
+
+    def motion(t):
+        t = np.asarray(t, dtype=float)
+        x, v, a = np.zeros_like(t), np.zeros_like(t), np.zeros_like(t)
+        which = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(segs) - 1)
+        for k, (s0, x0, sgn, ta, vp, tf) in enumerate(segs):
+            sel = which == k
+            tau = np.maximum(t[sel] - s0, 0.0)
+            d_acc = 0.5 * acc * ta**2
+            t3 = np.clip(tau - ta - tf, 0.0, ta)
+            pos = np.where(tau < ta, 0.5 * acc * tau**2,
+                           np.where(tau < ta + tf, d_acc + vp * (tau - ta),
+                                    d_acc + vp * tf + vp * t3 - 0.5 * acc * t3**2))
+            vel = np.where(tau < ta, acc * tau, np.where(tau < ta + tf, vp, vp - acc * t3))
+            ac = np.where(tau < ta, acc, np.where(tau < ta + tf, 0.0,
+                                                  np.where(tau < 2 * ta + tf, -acc, 0.0)))
+            x[sel], v[sel], a[sel] = x0 + sgn * pos, sgn * vel, sgn * ac
+        return x, v, a
+
+    return Scenario(duration=total, motion=motion,
+                    name=f"point to point through {points.tolist()} m")
+
+
+def sinusoid(amplitude: float, period: float, cycles: float = 2.0) -> Scenario:
+    """Position reference ``x = A (1 - cos(2 pi t / T))`` [m]: oscillation of amplitude A about
+    A, starting at rest, with a velocity reversal every half period (the paper's Fig 8: 10 um,
+    3.7 s)."""
+    amplitude = _positive("amplitude", amplitude)
+    period = _positive("period", period)
+    w = 2.0 * math.pi / period
+
+    def motion(t):
+        t = np.asarray(t, dtype=float)
+        return (amplitude * (1 - np.cos(w * t)), amplitude * w * np.sin(w * t),
+                amplitude * w * w * np.cos(w * t))
+
+    return Scenario(duration=_positive("cycles", cycles) * period, motion=motion,
+                    name=f"sinusoid {amplitude * 1e6:g} um, {period:g} s")
+
+
+def circle(radius: float, period: float, cycles: float = 2.0) -> Scenario:
+    """The X component of a circle of ``radius`` [m] run in ``period`` [s], started at its X
+    extreme: ``x = R (cos(2 pi t / T) - 1)`` (the paper's Fig 2 circles of 20 and 5 um)."""
+    radius = _positive("radius", radius)
+    period = _positive("period", period)
+    w = 2.0 * math.pi / period
+
+    def motion(t):
+        t = np.asarray(t, dtype=float)
+        return (radius * (np.cos(w * t) - 1), -radius * w * np.sin(w * t),
+                -radius * w * w * np.cos(w * t))
+
+    return Scenario(duration=_positive("cycles", cycles) * period, motion=motion,
+                    name=f"circle X, radius {radius * 1e6:g} um, {period:g} s")
+
+
+def custom(duration: float, x_ref=None, v_ref=None, a_ref=None, forces=None,
+           speed: float = 0.0, name: str = "custom") -> Scenario:
+    """A scenario from user functions of time: ``x_ref(t)`` [m], ``v_ref(t)`` [m/s],
+    ``a_ref(t)`` [m/s^2] (feed-forward inputs; zero when not given) and ``forces``
+    ``{dof: f(t)}`` [N]."""
+    motion = None
+    if any(f is not None for f in (x_ref, v_ref, a_ref)):
+        for label, f in (("x_ref", x_ref), ("v_ref", v_ref), ("a_ref", a_ref)):
+            if f is not None and not callable(f):
+                raise ValueError(f"{label} must be a function of time t [s]")
+
+        def motion(t):
+            return tuple((f if f is not None else _zero)(t) for f in (x_ref, v_ref, a_ref))
+
+    return Scenario(duration=duration, motion=motion, forces=dict(forces or {}), speed=speed,
+                    name=name)

@@ -1,0 +1,174 @@
+"""Table 3 trials and the paper's remarks A-C on a short sweep of the small axis; executors;
+the axis glue; the table3 and verify commands (in-process)."""
+
+import json
+import pickle
+from concurrent.futures import ThreadPoolExecutor
+from types import MappingProxyType, SimpleNamespace
+
+import numpy as np
+import pytest
+from axis_fixtures import PADS, small_axis, small_drive
+
+from servotune.cli import main
+from servotune.friction import LuGreParameters
+from servotune.simulate import table3 as t3
+from servotune.simulate.setup import AxisSetup, axis_setup
+from servotune.simulate.verify import design_setup, verify_design
+
+P = LuGreParameters.named("bianchi2014")
+SHORT = t3.SweepSettings(40.0, 150.0, 3.0, (0.5, 3.0))   # the small axis resonates at 78-113 Hz
+TRIALS = (t3.Trial("lg", 50, 0.0), t3.Trial("vd", 50, 0.0), t3.Trial("lg", 50, 0.03),
+          t3.Trial("lg", 2000, 0.0), t3.Trial("vd", 2000, 0.0))
+
+
+def small_setup():
+    return AxisSetup("small", small_axis(), small_drive(velocity_feedforward=1.0), tuple(PADS),
+                     P, P.sigma2)
+
+
+@pytest.fixture(scope="module")
+def table():
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        return t3.table3(small_setup(), pool, TRIALS, SHORT)
+
+
+def test_remark_a_lugre_locks_viscous_frees_and_who_absorbs(table):
+    refs = table.references
+    lg, vd = table.rows[0], table.rows[1]
+    # LuGre at low force resonates at the locked-pad frequency, viscous-only at the free one
+    assert lg["resonance_hz"] == pytest.approx(refs["locked"]["resonance_hz"], rel=0.03)
+    assert vd["resonance_hz"] == pytest.approx(refs["viscous"]["resonance_hz"], rel=0.03)
+    assert abs(lg["energy_friction_j"]) > 100 * abs(lg["energy_motor_j"])
+    assert abs(vd["energy_motor_j"]) > 5 * abs(vd["energy_friction_j"])
+    assert table.remarks["A"]["holds"]
+
+
+def test_remark_b_friction_work_is_steady_friction_times_distance(table):
+    row = table.rows[2]
+    expect = -float(t3.steady_state_friction(P, 0.03)) * 0.03 * 2.5
+    assert row["energy_friction_j"] == pytest.approx(expect, rel=0.01)
+    assert row["energy_motor_j"] == pytest.approx(-row["energy_friction_j"], rel=0.01)
+    assert table.remarks["B"]["holds"]
+
+
+def test_remark_c_large_force_slides_and_damps(table):
+    lo, hi = table.rows[0], table.rows[3]
+    assert hi["wp_oscillation_per_force_m_per_n"] < 0.8 * lo["wp_oscillation_per_force_m_per_n"]
+    assert table.remarks["C"]["holds"]
+
+
+def test_every_trial_balances_its_energy(table):
+    for row in table.rows:
+        assert row["balance_relative_residual"] < 1e-3
+
+
+def test_serial_and_parallel_runs_agree(table):
+    serial = t3.table3(small_setup(), None, TRIALS[:2], SHORT)
+    for a, b in zip(serial.rows, table.rows[:2], strict=True):
+        assert a["energy_friction_j"] == b["energy_friction_j"]
+
+
+def test_jobs_are_picklable_plain_data():
+    job = (t3.run_trial, small_setup(), TRIALS[0], SHORT)
+    fn, *args = pickle.loads(pickle.dumps(job))
+    assert fn is t3.run_trial and args[1] == TRIALS[0]
+
+
+def test_the_paper_table_has_fifteen_trials_in_order():
+    assert len(t3.TRIALS) == 15
+    assert [t.model for t in t3.TRIALS[:3]] == ["lg", "vd", "lg"]
+    assert t3.TRIALS[2].speed == 0.03 and t3.TRIALS[12].force_pp == 2000
+
+
+# ---------------------------------------------------------------- glue
+
+def axis_tables():
+    return SimpleNamespace(
+        name="small", structure=small_axis(),
+        friction=MappingProxyType({"pads": ("pad1.x", "pad2.x"), "lugre": "bianchi2014",
+                                   "viscous": 5578.0}),
+        drive={"encoder": "linear",
+               "motor": {"rotor": "motor.rotor", "stator": "motor.stator",
+                         "torque_constant": 1.2, "back_emf_constant": 1.2, "resistance": 0.4,
+                         "inductance": 3e-3},
+               "transmission": {"ratio": small_drive().ratio},
+               "current_loop": {"kp": 15.0, "ti": 2e-3},
+               "velocity_loop": {"kp": small_drive().velocity_loop.kp, "ti": 12e-3},
+               "position_loop": {"kv_m_per_min_per_mm": 1.0}})
+
+
+def test_axis_setup_reads_the_tables():
+    s = axis_setup(axis_tables())
+    assert s.pads == ("pad1.x", "pad2.x") and s.lugre == P and s.viscous == 5578.0
+    ref = small_drive(velocity_feedforward=1.0)
+    assert s.drive == ref
+
+
+@pytest.mark.parametrize("change, match", [
+    (("friction", {"pads": ()}), "pads"),
+    (("friction", {"pads": ("pad1.x",), "lugre": {"fc": 1.0}}), "unknown keys|missing"),
+    (("drive", {}), r"\[drive\]")])
+def test_axis_setup_errors_name_the_key(change, match):
+    ax = axis_tables()
+    setattr(ax, *change)
+    with pytest.raises(ValueError, match=match):
+        axis_setup(ax)
+
+
+# ---------------------------------------------------------------- commands
+
+@pytest.fixture
+def small_axis_command(monkeypatch):
+    import servotune.cli.table3 as cli_t3
+    import servotune.cli.verify as cli_v
+
+    monkeypatch.setattr(cli_t3, "load_setup", lambda path: small_setup())
+    monkeypatch.setattr(cli_v, "load_setup", lambda path: small_setup())
+
+
+def test_table3_command_json_rows(small_axis_command, capsys):
+    assert main(["table3", "small", "--json", "--workers", "1", "--duration", "0.4",
+                 "--f-start-hz", "100", "--f-end-hz", "120", "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["rows"]) == 15
+    keys = {"model", "force_pp_n", "speed_m_per_s", "energy_friction_j", "energy_motor_j",
+            "resonance_hz", "wp_oscillation_per_force_m_per_n"}
+    assert keys <= set(out["rows"][0])
+    assert set(out["remarks"]) == {"A", "B", "C"}
+
+
+def test_table3_text_and_bad_workers(small_axis_command, capsys):
+    assert main(["table3", "small", "--workers", "0"]) == 1
+    assert "--workers" in capsys.readouterr().err
+
+
+def test_verify_command_reads_the_design(small_axis_command, tmp_path, capsys):
+    res = tmp_path / "tuned.json"
+    res.write_text(json.dumps({"axis": "small", "design": {
+        "c": 2e4, "kv": 16.7, "kp": small_drive().velocity_loop.kp, "ti": 0.012}}))
+    assert main(["verify", str(res), "--json", "--duration", "1.5", "--f-start-hz", "105",
+                 "--f-end-hz", "120", "--force-pp", "20"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["design"]["c"] == 2e4
+    sweep = out["sweeps"][0]
+    # at 20 N p-p the pads stay in presliding: that prediction holds, the viscous one not
+    assert sweep["agrees_presliding"] and not sweep["agrees_viscous"]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"axis": "small"}))
+    assert main(["verify", str(bad)]) == 1
+    assert "'design'" in capsys.readouterr().err
+
+
+def test_describing_function_prediction_follows_large_amplitude():
+    # at 4 kN the pads slide; the describing function at the simulated amplitude predicts the
+    # resonance better than the locked pads do
+    setup = design_setup(small_setup(), c=P.sigma2)
+    res = verify_design(setup, forces=(4000.0,), f_start_hz=80.0, f_end_hz=130.0,
+                        duration=1.5)
+    s = res["sweeps"][0]
+    err_df = abs(s["describing"]["resonance_hz"] / s["resonance_hz"] - 1)
+    err_locked = abs(res["linear"]["locked"]["resonance_hz"] / s["resonance_hz"] - 1)
+    assert s["pad_amplitude_m"] > P.fs / P.sigma0
+    assert err_df < err_locked
+    assert np.isfinite(s["describing"]["ceq"])
