@@ -20,7 +20,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 
 ## make demo: install, run the main job on the bundled default, figures in out/
 demo: $(VENV)/.installed
-	$(BIN)/servotune twomass --out $(OUT) --force
+	$(BIN)/servotune tune models/paper_x_axis --out $(OUT)/tune_paper_x_axis --force
 
 ## make test: install with the test extra, run the whole suite with doctests
 test: $(VENV)/.installed-test

@@ -67,7 +67,7 @@ from .chatter import (
 )
 
 # structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
-from . import analysis
+from . import analysis, design
 from .axis import Axis, AxisFormatError, Cutting, load_axis
 from .structure import (
     CraigBamptonCheck,

@@ -20,6 +20,7 @@ __all__ = [
     "plot_equivalent_damping",
     "plot_g_alpha",
     "plot_hysteresis",
+    "plot_mode_peaks",
     "plot_pad_hysteresis",
     "plot_response_hysteresis",
     "plot_stability_lobes",
@@ -473,11 +474,11 @@ def plot_compliance(curves, title: str = "Work-piece compliance",
     ax_ph.set_xlabel("frequency [Hz]")
     ax_ph.set_yticks(np.arange(-180, 181, 90))
     ax_ph.grid(True, which="both", alpha=0.4)
+    return fig
 
 
 # ------------------------------------------------------------------------------------------
 # time simulation (servotune.simulate): sweep envelopes, energies, pad hysteresis
-
 
 
 def plot_sweep_envelope(envelopes, labels=None, reference=None, title=None) -> Figure:
@@ -542,4 +543,28 @@ def plot_pad_hysteresis(result, pad: str, t_start: float = 0.0, t_end: float | N
     ax.set_ylabel(f"friction force at {pad} [N]")
     ax.set_title(title or f"Pad hysteresis, {result.scenario}", fontsize=10)
     ax.grid(True, alpha=0.4)
+    return fig
+
+
+def plot_mode_peaks(mode_peaks) -> Figure:
+    """Compliance peak of each work-piece mode against the guide-way damping C (sec 5.2):
+    different modes ask for different optimal C; the chosen C is marked."""
+    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    c = mode_peaks.c_values
+    i = int(np.argmin(np.abs(np.log(c / mode_peaks.c_chosen))))
+    for m in range(mode_peaks.peaks.shape[0]):
+        f = mode_peaks.frequencies[m, i] * HZ_PER_RAD_S
+        (line,) = ax.loglog(c, mode_peaks.peaks[m], lw=1.6,
+                            label=f"mode at {f:.0f} Hz (at the chosen C); best C = "
+                                  f"{mode_peaks.c_best[m]:.2g} N s/m")
+        j = int(np.nanargmin(mode_peaks.peaks[m]))
+        ax.plot([c[j]], [mode_peaks.peaks[m, j]], "o", color=line.get_color())
+    ax.axvline(mode_peaks.c_chosen, color="k", ls="--", lw=1.0,
+               label=f"chosen C = {mode_peaks.c_chosen:.3g} N s/m")
+    ax.set_xlabel("guide-way damping C [N s/m]")
+    ax.set_ylabel("peak of the mode's compliance term [m/N]")
+    ax.set_title("Several modes, one C: each mode's compliance peak against C (sec 5.2)")
+    ax.grid(True, which="both", alpha=0.4)
+    ax.legend(fontsize=8)
     return fig

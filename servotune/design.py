@@ -1,0 +1,322 @@
+"""The design job on an axis description: set up the tuning, run it, verify, summarise.
+
+:func:`tune_axis` turns an :class:`~servotune.axis.Axis` into a
+:class:`~servotune.tuning.TuningProblem` (viscous guide-way damping C at the pads, the drive's
+Kv and velocity PI, the axis' requirements and milling set-up), solves it, and gathers what a
+designer reads: the design before and after, loops, compliance and lobes of both, the
+several-modes trade-off in C (paper sec 5.2) and, for a two-mass axis, the check of C against
+the closed-form fixed-point optimum (paper sec 4.1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import analysis, twomass
+from .axis import Axis
+from .plant import Contact
+from .tuning import ChatterTarget, Design, TuningProblem, TuningResult, tune
+
+__all__ = [
+    "DEFAULT_BOUNDS",
+    "TwoMassCheck",
+    "AxisTuning",
+    "ModePeaks",
+    "tuning_problem",
+    "two_mass_check",
+    "mode_peaks_vs_damping",
+    "tune_axis",
+]
+
+HZ = 1.0 / (2.0 * math.pi)
+
+#: Default search bounds (SI); ``kp`` is relative to the initial value.
+DEFAULT_BOUNDS = {"c": (1e3, 1e8), "kv": (1.0, 300.0), "kp_factor": (0.01, 100.0),
+                  "ti": (1e-3, 1.0)}
+
+
+def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
+                   bounds: dict | None = None, c0: float | None = None) -> TuningProblem:
+    """The tuning problem of an axis.
+
+    Parameters
+    ----------
+    free : sequence of str
+        Free variables among c, kv, kp, ti (those needing a drive are dropped when the axis has
+        none).
+    chatter_weight : float in [0, 1]
+        Weight of the chatter limit (initial b_crit / b_crit) against the compliance peak
+        (peak / initial peak); needs ``[cutting]``.
+    bounds : dict, optional
+        ``{name: (low, high)}`` overriding :data:`DEFAULT_BOUNDS`.
+    c0 : float, optional
+        Initial C [N s/m]; default the axis' viscous guide-way damping.
+    """
+    if not 0.0 <= chatter_weight <= 1.0:
+        raise ValueError(f"chatter_weight must lie in [0, 1], got {chatter_weight!r}")
+    drive = axis.drive
+    free = tuple(v for v in free if drive is not None or v == "c")
+    c0 = axis.friction.viscous if c0 is None else c0
+    chatter = None
+    if axis.cutting is not None:
+        chatter = ChatterTarget.from_setup(axis.cutting.setup, axis.cutting.direction,
+                                           axis.requirements.depth_required)
+    elif chatter_weight > 0:
+        axis.require_cutting()
+    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
+    problem_bounds = {"c": b["c"]}
+    if drive is not None:
+        kp0 = drive.velocity_loop.kp
+        problem_bounds.update(
+            kv=b["kv"], ti=b["ti"],
+            kp=b.get("kp", (kp0 * b["kp_factor"][0], kp0 * b["kp_factor"][1])))
+    band = axis.requirements.band
+    if drive is None and len(axis.pads) == 1 and axis.structure.n == 2:
+        # a two-mass axis (layout B): the peak is sought above the first fixed point, as the
+        # closed-form optimum assumes (|H| ~ 1/(w C) as w -> 0)
+        system = _two_mass_system(axis)
+        if system is not None:
+            w_f1, w_f2 = twomass.fixed_points(system)
+            band = (float(w_f1), max(band[1], 4.0 * float(w_f2)))
+    from dataclasses import replace
+
+    requirements = replace(axis.requirements, band=band)
+    return TuningProblem(axis.structure, axis.pads, c=c0, drive=drive, free=free,
+                         bounds=problem_bounds, requirements=requirements, chatter=chatter,
+                         weights=(1.0 - chatter_weight, chatter_weight))
+
+
+def _two_mass_system(axis: Axis) -> twomass.TwoMassSystem | None:
+    """Layout B read off a 2-DOF axis (pad = slide M1 on the damper, wp = M2), if it is one."""
+    s = axis.structure
+    if s.n != 2 or axis.friction is None or "wp.x" not in s.dofs:
+        return None
+    i, j = int(s.index(axis.pads[0])), int(s.index("wp.x"))
+    m, k = s.mass, s.stiffness
+    if abs(m[i, j]) > 1e-12 * m.max() or not np.allclose(
+            k, k[j, j] * np.array([[1, -1], [-1, 1]]), rtol=1e-9, atol=0):
+        return None
+    return twomass.TwoMassSystem(m1=m[i, i], k=k[j, j], alpha=m[j, j] / m[i, i])
+
+
+@dataclass(frozen=True)
+class TwoMassCheck:
+    """The tuned C of a two-mass axis against the closed forms of sec 4.1 (Eq 4, 7)."""
+
+    system: twomass.TwoMassSystem
+    c_opt_analytic: float
+    c_opt_tuned: float
+    peak_analytic: float
+    peak_tuned: float
+
+    @property
+    def c_relative_difference(self) -> float:
+        return self.c_opt_tuned / self.c_opt_analytic - 1.0
+
+    @property
+    def peak_relative_difference(self) -> float:
+        return self.peak_tuned / self.peak_analytic - 1.0
+
+    def to_dict(self) -> dict:
+        return {"m1": self.system.m1, "k": self.system.k, "alpha": self.system.alpha,
+                "c_opt_analytic": self.c_opt_analytic, "c_opt_tuned": self.c_opt_tuned,
+                "c_relative_difference": self.c_relative_difference,
+                "peak_compliance_analytic": self.peak_analytic,
+                "peak_compliance_tuned": self.peak_tuned,
+                "peak_relative_difference": self.peak_relative_difference}
+
+
+def two_mass_check(axis: Axis, result: TuningResult | None) -> TwoMassCheck | None:
+    """Compare a tuned C with Copt and g(alpha)/K when the axis is a two-mass layout B."""
+    system = _two_mass_system(axis)
+    if system is None or result is None or result.after is None:
+        return None
+    return TwoMassCheck(system, twomass.optimal_damping(system), result.design.c,
+                        twomass.optimal_peak(system), result.after.peak_compliance)
+
+
+@dataclass(frozen=True)
+class ModePeaks:
+    """Compliance peak of each work-piece mode against the guide-way damping C (sec 5.2).
+
+    Attributes
+    ----------
+    c_values : numpy.ndarray
+        C [N s/m].
+    frequencies : numpy.ndarray
+        (modes, len(c)) natural frequency [rad/s] of each tracked closed-loop mode.
+    peaks : numpy.ndarray
+        (modes, len(c)) peak of the mode's own term of the compliance, |R|/|Re lambda| [m/N].
+    c_best : numpy.ndarray
+        The C [N s/m] that minimises each mode's peak on the grid.
+    c_chosen : float
+        The C of the design.
+    """
+
+    c_values: np.ndarray
+    frequencies: np.ndarray
+    peaks: np.ndarray
+    c_best: np.ndarray
+    c_chosen: float
+
+    def to_dict(self) -> dict:
+        i = int(np.argmin(np.abs(np.log(self.c_values / self.c_chosen))))
+        return {"c_chosen": self.c_chosen, "modes": [
+            {"frequency_at_chosen_c_hz": float(self.frequencies[m, i] * HZ),
+             "peak_at_chosen_c": float(self.peaks[m, i]),
+             "c_best": float(self.c_best[m]),
+             "peak_at_best_c": float(np.nanmin(self.peaks[m]))}
+            for m in range(self.peaks.shape[0])]}
+
+    def plot(self):
+        from .plots import plot_mode_peaks
+
+        return plot_mode_peaks(self)
+
+
+def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | None = None,
+                          f_max_hz: float = 300.0, keep: int = 4,
+                          significance: float = 0.01) -> ModePeaks:
+    """Track the closed-loop modes that move the work piece as C varies.
+
+    For each C the closed-loop plant (``viscous`` pads, the drive) is put in modal form,
+    ``H(s) = sum_i R_i / (s - lambda_i)``; a mode's own peak is ``2 |R_i| / |Re lambda_i|``
+    (its pair's term at resonance). The modes are chosen at the design's C (the ``keep``
+    largest peaks below ``f_max_hz`` that reach ``significance`` times the largest) and
+    followed outwards in C by the nearest pole; a mode that turns over-damped or jumps by more
+    than a quarter of its frequency ends its track (NaN).
+    """
+    c_values = np.asarray(c_values, dtype=float)
+    chosen = float(c_chosen if c_chosen is not None else axis.friction.viscous)
+    controlled = (drive or axis.drive) is not None
+    poles, peaks = [], []
+    for c in c_values:
+        plant = analysis.axis_plant(axis, Contact.viscous(c), drive, controlled=controlled)
+        sub = plant[plant.output_labels.index("wp_x"), plant.input_labels.index("f_wp_x")]
+        lam, v = np.linalg.eig(sub.A)
+        res = (sub.C @ v).ravel() * np.linalg.solve(v, sub.B).ravel()
+        sel = (lam.imag > 0) & (lam.imag * HZ < f_max_hz)
+        poles.append(lam[sel])
+        peaks.append(2 * np.abs(res[sel]) / np.maximum(np.abs(lam[sel].real), 1e-300))
+    start = int(np.argmin(np.abs(np.log(c_values / chosen))))
+    p0 = peaks[start]
+    order = [i for i in np.argsort(-p0)[:keep] if p0[i] >= significance * p0.max()]
+    tracks_f = np.full((len(order), c_values.size), np.nan)
+    tracks_p = np.full((len(order), c_values.size), np.nan)
+    for m, i0 in enumerate(order):
+        tracks_f[m, start], tracks_p[m, start] = abs(poles[start][i0]), p0[i0]
+        for direction in (1, -1):
+            current = poles[start][i0]
+            j = start + direction
+            while 0 <= j < c_values.size and poles[j].size:
+                dist = np.abs(poles[j] - current)
+                i = int(np.argmin(dist))
+                if dist[i] > 0.25 * abs(current):
+                    break
+                current = poles[j][i]
+                tracks_f[m, j], tracks_p[m, j] = abs(current), peaks[j][i]
+                j += direction
+    best = np.array([c_values[np.nanargmin(row)] for row in tracks_p])
+    return ModePeaks(c_values, tracks_f, tracks_p, best, chosen)
+
+
+@dataclass(frozen=True)
+class AxisTuning:
+    """Everything the design job produces for an axis (see :func:`tune_axis`)."""
+
+    axis: Axis
+    result: TuningResult
+    loops_before: analysis.LoopReport | None = None
+    loops_after: analysis.LoopReport | None = None
+    compliance_before: analysis.ComplianceCurve | None = None
+    compliance_after: analysis.ComplianceCurve | None = None
+    lobes_before: object = None
+    lobes_after: object = None
+    two_mass: TwoMassCheck | None = None
+    mode_peaks: ModePeaks | None = None
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def design(self) -> Design:
+        return self.result.design
+
+    def to_dict(self) -> dict:
+        """The results file: SI values, the usual engineering units under suffixed keys."""
+        r = self.result
+        before, after = r.before, r.after
+        d = r.design
+        out = {
+            "axis": str(self.axis.path),
+            "axis_name": self.axis.name,
+            "success": r.success,
+            "verified": r.success,
+            "reasons": list(r.reasons),
+            "free": list(r.problem.free),
+            "design": d.to_dict(),
+            "initial_design": r.initial.to_dict(),
+            "kv_m_per_min_per_mm": None if d.kv is None else d.kv * 60.0 / 1000.0,
+            "kv_m_per_min_per_mm_before": None if r.initial.kv is None
+            else r.initial.kv * 60.0 / 1000.0,
+            "peak_compliance_before": before.peak_compliance,
+            "peak_compliance_after": None if after is None else after.peak_compliance,
+            "peak_frequency_before_hz": before.peak_frequency * HZ,
+            "peak_frequency_after_hz": None if after is None else after.peak_frequency * HZ,
+            "b_crit_before_m": before.b_crit,
+            "b_crit_after_m": None if after is None else after.b_crit,
+            "ms_velocity": None if after is None or after.velocity is None else after.velocity.ms,
+            "ms_position": None if after is None or after.position is None else after.position.ms,
+            "ms_velocity_before": None if before.velocity is None else before.velocity.ms,
+            "ms_position_before": None if before.position is None else before.position.ms,
+            "loops_before": None if self.loops_before is None else self.loops_before.to_dict(),
+            "loops_after": None if self.loops_after is None else self.loops_after.to_dict(),
+            "active_constraints": list(r.active),
+            "solver": r.stats,
+            "predicted": r.predicted,
+            "c_opt_analytic": None if self.two_mass is None else self.two_mass.c_opt_analytic,
+            "two_mass_check": None if self.two_mass is None else self.two_mass.to_dict(),
+            "mode_peaks": None if self.mode_peaks is None else self.mode_peaks.to_dict(),
+            "notes": list(self.notes),
+        }
+        return out
+
+
+def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
+              starts: int = 4, bounds: dict | None = None, seed: int = 0,
+              tolerance: float | None = None) -> AxisTuning:
+    """Tune an axis and gather the before/after analyses.
+
+    Raises
+    ------
+    RequirementsNotMetError, UnstableLoopError, AxisFormatError
+        As :func:`servotune.tuning.tune` and the axis loader.
+    """
+    problem = tuning_problem(axis, free, chatter_weight, bounds)
+    two_mass = _two_mass_system(axis) is not None
+    if tolerance is None:
+        tolerance = 1e-10 if two_mass else 1e-6
+    result = tune(problem, starts=starts, seed=seed, tolerance=tolerance)
+    out = {"axis": axis, "result": result}
+    if two_mass:
+        out["two_mass"] = two_mass_check(axis, result)
+    if axis.drive is not None and result.after is not None:
+        before_drive = problem.drive_for(result.initial)
+        after_drive = problem.drive_for(result.design)
+        c_before, c_after = Contact.viscous(result.initial.c), Contact.viscous(result.design.c)
+        out["loops_before"] = analysis.loop_report(axis, c_before, before_drive)
+        out["loops_after"] = analysis.loop_report(axis, c_after, after_drive)
+        omega = analysis.default_omega(1.0, 1000.0, 3000)
+        out["compliance_before"] = analysis.compliance_curve(axis, c_before, before_drive, omega,
+                                                             "before")
+        out["compliance_after"] = analysis.compliance_curve(axis, c_after, after_drive, omega,
+                                                            "after")
+        if axis.cutting is not None:
+            out["lobes_before"] = analysis.axis_lobes(axis, c_before, before_drive)
+            out["lobes_after"] = analysis.axis_lobes(axis, c_after, after_drive)
+        if "c" in problem.free:
+            lo, hi = problem.bounds["c"]
+            out["mode_peaks"] = mode_peaks_vs_damping(
+                axis, np.geomspace(lo, hi, 41), after_drive, result.design.c)
+    return AxisTuning(**out)
