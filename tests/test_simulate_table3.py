@@ -4,7 +4,6 @@ the axis glue; the table3 and verify commands (in-process)."""
 import json
 import pickle
 from concurrent.futures import ThreadPoolExecutor
-from types import MappingProxyType, SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,6 +12,7 @@ from axis_fixtures import PADS, small_axis, small_drive
 from servotune.cli import main
 from servotune.friction import LuGreParameters
 from servotune.simulate import table3 as t3
+from servotune.axis import load_axis
 from servotune.simulate.setup import AxisSetup, axis_setup
 from servotune.simulate.verify import design_setup, verify_design
 
@@ -83,37 +83,38 @@ def test_the_paper_table_has_fifteen_trials_in_order():
 
 # ---------------------------------------------------------------- glue
 
-def axis_tables():
-    return SimpleNamespace(
-        name="small", structure=small_axis(),
-        friction=MappingProxyType({"pads": ("pad1.x", "pad2.x"), "lugre": "bianchi2014",
-                                   "viscous": 5578.0}),
-        drive={"encoder": "linear",
-               "motor": {"rotor": "motor.rotor", "stator": "motor.stator",
-                         "torque_constant": 1.2, "back_emf_constant": 1.2, "resistance": 0.4,
-                         "inductance": 3e-3},
-               "transmission": {"ratio": small_drive().ratio},
-               "current_loop": {"kp": 15.0, "ti": 2e-3},
-               "velocity_loop": {"kp": small_drive().velocity_loop.kp, "ti": 12e-3},
-               "position_loop": {"kv_m_per_min_per_mm": 1.0}})
+def small_axis_description(tmp_path, friction=True, drive=True):
+    """The small test axis written as an axis description and loaded."""
+    structure, d = small_axis(), small_drive()
+    np.savez(tmp_path / "structure.npz", mass=structure.mass, stiffness=structure.stiffness,
+             dofs=np.array(structure.dofs))
+    text = '[axis]\nname = "small"\n[structure]\nfile = "structure.npz"\n'
+    if friction:
+        text += ('[friction]\npads = ["pad1.x", "pad2.x"]\nlugre = "bianchi2014"\n'
+                 "viscous = 5578.0\n")
+    if drive:
+        text += (
+            '[drive]\nencoder = "linear"\n[drive.motor]\ntorque_constant = 1.2\n'
+            "back_emf_constant = 1.2\nresistance = 0.4\ninductance = 3e-3\n"
+            f"[drive.transmission]\nratio = {d.ratio!r}\n"
+            "[drive.current_loop]\nkp = 15.0\nti = 2e-3\n"
+            f"[drive.velocity_loop]\nkp = {d.velocity_loop.kp!r}\nti = 12e-3\n"
+            "[drive.position_loop]\nkv_m_per_min_per_mm = 1.0\n")
+    (tmp_path / "axis.toml").write_text(text)
+    return load_axis(tmp_path)
 
 
-def test_axis_setup_reads_the_tables():
-    s = axis_setup(axis_tables())
+def test_axis_setup_reads_the_description(tmp_path):
+    s = axis_setup(small_axis_description(tmp_path))
     assert s.pads == ("pad1.x", "pad2.x") and s.lugre == P and s.viscous == 5578.0
-    ref = small_drive(velocity_feedforward=1.0)
-    assert s.drive == ref
+    assert s.drive == small_drive(velocity_feedforward=1.0)
 
 
-@pytest.mark.parametrize("change, match", [
-    (("friction", {"pads": ()}), "pads"),
-    (("friction", {"pads": ("pad1.x",), "lugre": {"fc": 1.0}}), "unknown keys|missing"),
-    (("drive", {}), r"\[drive\]")])
-def test_axis_setup_errors_name_the_key(change, match):
-    ax = axis_tables()
-    setattr(ax, *change)
+@pytest.mark.parametrize("friction, drive, match", [
+    (False, True, r"\[friction\] is missing"), (True, False, r"\[drive\] is missing")])
+def test_axis_setup_errors_name_the_table(tmp_path, friction, drive, match):
     with pytest.raises(ValueError, match=match):
-        axis_setup(ax)
+        axis_setup(small_axis_description(tmp_path, friction, drive))
 
 
 # ---------------------------------------------------------------- commands
