@@ -1,418 +1,25 @@
-"""Tuning of guide-way damping and servo gains with casadi (the only casadi user).
-
-The design variables are the guide-way damping C (axis total, shared by the pads), the position
-gain Kv and the velocity PI (Kp, Ti); the user chooses which are free. Objectives are the peak
-work-piece compliance over a band and the chatter margin; constraints are the sensitivity peaks
-Ms of the velocity and position loops (gain and phase margins enter through the Ms disk:
-Ms <= 1/(2 sin(PM/2)) guarantees PM, Ms <= GM/(GM - 1) guarantees GM), a minimum Kv, and bounds.
-
-Frequency responses in real arithmetic
---------------------------------------
-casadi has no complex numbers, and rebuilding the closed loop for every trial design would be
-slow, so the responses are written at the *ports* of the structure (work piece, pads, motor,
-encoder). With R(jw) the structure's receptance between the ports (modal sum, computed once),
-viscous pads z = (k + j w C)/n couple in closed form,
-
-    R_c = R - z R_:p (I + z R_pp)^-1 R_p:  =  R - z sum_i a_i b_i^T / (1 + z lambda_i),
-
-with the eigen-decomposition R_pp = U diag(lambda) U^-1 done once per frequency. The drive then
-closes around the scalar port receptances (torque port e = rotor - stator, feedback port f):
-
-    P_phi = e^T R_c e,  P_fb = f^T R_c e,  a = C_i F C_v,  b = kt ke,  den = j w L + R + C_i
-    L_v   = a j w P_phi / (den + b j w P_phi)                        (position loop open)
-    L_p   = (Kv/r) a P_fb / (den + (a + b) j w P_phi)                (velocity loop closed)
-    T/F   = -(a (Kv/r) R_c[f, wp] + (a + b) j w R_c[e, wp]) / (den + a (Kv/r) P_fb
-            + (a + b) j w P_phi)
-    x/F   = R_c[wp, wp] + R_c[wp, e] T/F
-
-Each complex quantity is carried as a (real, imaginary) pair of casadi expressions vectorised
-over the frequency grid, so IPOPT gets exact derivatives. Peak and Ms constraints are semi-
-infinite; they are imposed on a grid that is refined by exchange: after each solve the true
-extrema are located on a fine grid, refined by bounded scalar search and added to the grid,
-until the grid and the true values agree.
-
-After solving, :func:`verify` checks the design independently with python-control on the
-interconnected state-space plant (closed-loop poles, margins, Ms on a dense grid the optimiser
-never saw, compliance peak, chatter limit). A design that fails verification is returned with
-``success = False`` and the reasons, never as a success.
-
-References
-----------
-G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
-sec 4.1 (optimal guide-way damping), sec 5.2.
-J. A. E. Andersson et al., "CasADi: a software framework for nonlinear optimization and
-optimal control", Math. Prog. Comp. 11 (2019) 1-36.
-R. Hettich, K. O. Kortanek, "Semi-infinite programming: theory, methods, and applications",
-SIAM Review 35 (1993) 380-429 (exchange methods).
-K. J. Astrom, R. M. Murray, Feedback Systems, 2nd ed. (2021), sec 13.3 (Ms and margins).
-"""
+"""Solving the tuning problem with IPOPT (exchange of grid points) and verifying the result
+with python-control."""
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
 
-from . import frequency
-from .drive import Drive, PIController
-from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
-from .requirements import Requirements
-from .structure.model import ModalModel
+from .. import frequency
+from ..plant import Contact, UnstableLoopError, build_plant, loop_transfer
+from .ports import ResponseModel, _grid, _port_data, _responses, evaluate
+from .problem import VARIABLES, Design, RequirementsNotMetError, TuningProblem
 
-__all__ = [
-    "Requirements",
-    "ChatterTarget",
-    "Design",
-    "TuningProblem",
-    "Performance",
-    "TuningResult",
-    "RequirementsNotMetError",
-    "ResponseModel",
-    "evaluate",
-    "verify",
-    "tune",
-]
+__all__ = ["Performance", "TuningResult", "tune", "verify"]
 
-VARIABLES = ("c", "kv", "kp", "ti")
 HZ = 1.0 / (2.0 * math.pi)
 
 
-class RequirementsNotMetError(ValueError):
-    """The requirements cannot be met within the bounds (names the binding constraint)."""
-
-
-@dataclass(frozen=True)
-class ChatterTarget:
-    """Chatter-limit objective in the oriented one-direction zero-order form.
-
-    With only the feed direction flexible, the oriented FRF is ``Phi = mu G`` (G the work-piece
-    compliance, mu the directional factor of the milling set-up) and the limiting depth is
-    ``b_lim = -1 / (2 Kt Re Phi)`` at the chatter frequency; the absolute limit is
-    ``b_crit = -1 / (2 Kt min_w Re Phi)`` (Tlusty; Altintas and Budak 1995; see
-    :mod:`servotune.chatter.zoa`).
-
-    Parameters
-    ----------
-    kt : float
-        Tangential cutting coefficient [N/m^2] (> 0).
-    mu : float
-        Directional factor mu = D_xx/Kt [-] (non-zero; may be negative).
-    required_depth : float, optional
-        Required axial depth [m]; the margin is b_crit / required_depth.
-
-    Examples
-    --------
-    A single mode of stiffness k and damping zeta has min Re G = -1/(4 k zeta (1 + zeta)), so
-    Tlusty's b_crit = 2 k zeta (1 + zeta) / (Kt mu):
-
-    >>> k, zeta, target = 1e7, 0.02, ChatterTarget(kt=6e8, mu=0.5)
-    >>> b = target.b_crit(target.mu * -1.0 / (4 * k * zeta * (1 + zeta)))
-    >>> round(b / (2 * k * zeta * (1 + zeta) / (6e8 * 0.5)), 12)
-    1.0
-    """
-
-    kt: float
-    mu: float
-    required_depth: float | None = None
-
-    def __post_init__(self) -> None:
-        if not (self.kt > 0 and math.isfinite(self.kt)):
-            raise ValueError(f"ChatterTarget.kt must be finite and > 0 N/m^2, got {self.kt!r}")
-        if not (math.isfinite(self.mu) and self.mu != 0):
-            raise ValueError(f"ChatterTarget.mu must be finite and non-zero, got {self.mu!r}")
-        if self.required_depth is not None and not self.required_depth > 0:
-            raise ValueError("ChatterTarget.required_depth must be > 0 m")
-
-    @classmethod
-    def from_setup(cls, setup, direction: str = "x", required_depth: float | None = None):
-        """From a :class:`~servotune.chatter.MillingSetup` (flexible direction ``x`` or ``y``)."""
-        from .chatter import directional_factor
-
-        return cls(setup.kt, directional_factor(setup, direction), required_depth)
-
-    def b_crit(self, min_real: float) -> float:
-        """b_crit [m] from the most negative real part of the ORIENTED FRF mu G [m/N]."""
-        return math.inf if min_real >= 0 else -1.0 / (2.0 * self.kt * min_real)
-
-    def margin(self, b_crit: float) -> float | None:
-        """b_crit over the required depth (None without a requirement)."""
-        return None if self.required_depth is None else b_crit / self.required_depth
-
-
-@dataclass(frozen=True)
-class Design:
-    """Values of the design variables (SI): C [N s/m] (axis total), Kv [1/s], Kp [N m s/rad],
-    Ti [s]. Variables without a drive may be None."""
-
-    c: float
-    kv: float | None = None
-    kp: float | None = None
-    ti: float | None = None
-
-    def to_dict(self) -> dict:
-        return {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
-
-
-@dataclass(frozen=True)
-class TuningProblem:
-    """A tuning problem on a structure with viscous guide-way pads and, optionally, a drive.
-
-    Parameters
-    ----------
-    structure : ModalModel
-    pads : sequence of str
-        Pad DOFs where the guide-way damping C acts (shared equally).
-    c : float
-        Initial guide-way damping C [N s/m] (axis total).
-    drive : Drive, optional
-        Initial drive (its Kv, velocity Kp and Ti are the initial gains).
-    free : sequence of str
-        Which of ``("c", "kv", "kp", "ti")`` the optimiser may change.
-    bounds : dict, optional
-        ``{name: (low, high)}`` in SI; defaults: a factor 100 either way of the initial value.
-    requirements : Requirements
-    chatter : ChatterTarget, optional
-    weights : (float, float)
-        Weights of (compliance peak / initial peak, initial b_crit / b_crit) in the objective.
-    tracking_weight : float
-        Weight of Kv0/Kv in the objective when Kv is free: the compliance barely depends on
-        Kv, so without it Kv would be left anywhere the constraints allow; with it Kv goes as
-        high as the position-loop Ms allows (tracking accuracy grows with Kv).
-    contact_stiffness : float
-        Fixed total contact stiffness at the pads [N/m] (0 for purely viscous pads).
-    force : str
-        Work-piece DOF where the cutting force acts and the compliance is taken.
-    n_grid : int
-        Initial number of grid frequencies (the exchange refinement adds more).
-    """
-
-    structure: ModalModel
-    pads: tuple[str, ...]
-    c: float
-    drive: Drive | None = None
-    free: tuple[str, ...] = ("c",)
-    bounds: dict = field(default_factory=dict)
-    requirements: Requirements = field(default_factory=Requirements)
-    chatter: ChatterTarget | None = None
-    weights: tuple[float, float] = (1.0, 0.0)
-    tracking_weight: float = 0.05
-    contact_stiffness: float = 0.0
-    force: str = "wp.x"
-    n_grid: int = 60
-
-    def __post_init__(self) -> None:
-        pads = tuple(self.pads)
-        self.structure.index(list(pads) + [self.force])
-        object.__setattr__(self, "pads", pads)
-        free = tuple(dict.fromkeys(self.free))
-        unknown = [v for v in free if v not in VARIABLES]
-        if unknown:
-            raise ValueError(f"unknown design variables {unknown}; choose from {VARIABLES}")
-        if self.drive is None and set(free) - {"c"}:
-            raise ValueError(f"free variables {sorted(set(free) - {'c'})} need a drive")
-        if "c" in free and not pads:
-            raise ValueError("tuning C needs the pad DOFs (pads=...)")
-        if not free:
-            raise ValueError("no free design variables")
-        object.__setattr__(self, "free", free)
-        if not (self.c >= 0 and math.isfinite(self.c)):
-            raise ValueError(f"the initial damping c must be finite and >= 0, got {self.c!r}")
-        if "c" in free and self.c <= 0:
-            raise ValueError("a free damping C needs a positive initial value")
-        w_peak, w_chatter = (float(w) for w in self.weights)
-        if w_peak < 0 or w_chatter < 0 or w_peak + w_chatter == 0:
-            raise ValueError("weights must be >= 0 and not both zero")
-        if not (self.tracking_weight >= 0 and math.isfinite(self.tracking_weight)):
-            raise ValueError("tracking_weight must be finite and >= 0")
-        if w_chatter > 0 and self.chatter is None:
-            raise ValueError("a chatter weight needs a ChatterTarget (chatter=...)")
-        design = self.initial_design()
-        checked = {}
-        for name in VARIABLES:
-            value = getattr(design, name)
-            lo, hi = self.bounds.get(name, (value / 100.0, value * 100.0) if value else (0, 0))
-            if name in free and not (0 < lo <= value <= hi < math.inf):
-                raise ValueError(f"bounds of {name} must satisfy 0 < low <= initial <= high, got "
-                                 f"({lo!r}, {hi!r}) with initial {value!r}")
-            checked[name] = (float(lo), float(hi))
-        object.__setattr__(self, "bounds", checked)
-
-    def initial_design(self) -> Design:
-        d = self.drive
-        if d is None:
-            return Design(c=float(self.c))
-        return Design(c=float(self.c), kv=d.kv, kp=d.velocity_loop.kp, ti=d.velocity_loop.ti)
-
-    def drive_for(self, design: Design) -> Drive | None:
-        """The drive with a design's gains."""
-        if self.drive is None:
-            return None
-        return replace(self.drive, kv=design.kv,
-                       velocity_loop=PIController(kp=design.kp, ti=design.ti))
-
-
-# --------------------------------------------------------------------------------------------
-# complex arithmetic on (re, im) pairs of numpy arrays or casadi expressions
-class _Cx:
-    __slots__ = ("re", "im")
-
-    def __init__(self, re, im=0.0):
-        self.re, self.im = re, im
-
-    @staticmethod
-    def of(z):
-        z = np.asarray(z)
-        return _Cx(z.real.copy(), z.imag.copy())
-
-    def _c(self, other):
-        return other if isinstance(other, _Cx) else _Cx(other, 0.0)
-
-    def __add__(self, o):
-        o = self._c(o)
-        return _Cx(self.re + o.re, self.im + o.im)
-
-    __radd__ = __add__
-
-    def __sub__(self, o):
-        o = self._c(o)
-        return _Cx(self.re - o.re, self.im - o.im)
-
-    def __rsub__(self, o):
-        return self._c(o) - self
-
-    def __neg__(self):
-        return _Cx(-self.re, -self.im)
-
-    def __mul__(self, o):
-        o = self._c(o)
-        return _Cx(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
-
-    __rmul__ = __mul__
-
-    def __truediv__(self, o):
-        o = self._c(o)
-        den = o.re * o.re + o.im * o.im
-        return _Cx((self.re * o.re + self.im * o.im) / den, (self.im * o.re - self.re * o.im) / den)
-
-    def __rtruediv__(self, o):
-        return self._c(o) / self
-
-    def abs2(self):
-        return self.re * self.re + self.im * self.im
-
-    def value(self) -> np.ndarray:
-        return np.asarray(self.re) + 1j * np.asarray(self.im)
-
-
-@dataclass(frozen=True)
-class _PortData:
-    """Structure receptances at the ports on a frequency grid, prepared for C coupling."""
-
-    omega: np.ndarray
-    pairs: dict  # (a, b) -> R_ab (K,) complex
-    alpha: dict  # (a, b) -> (K, n_pads) complex
-    lam: np.ndarray  # (K, n_pads)
-    n_pads: int
-
-
-def _port_vectors(problem: TuningProblem) -> tuple[list[str], dict]:
-    """The structure DOFs at the ports and the port vectors wp, e (torque), f (feedback)."""
-    drive = problem.drive
-    dofs = [problem.force, *problem.pads]
-    if drive is not None:
-        m = drive.motor
-        dofs += [m.rotor] + ([m.stator] if m.stator else [])
-        if drive.feedback == "linear":
-            dofs.append(drive.encoder)
-    dofs = list(dict.fromkeys(dofs))
-    idx = {d: i for i, d in enumerate(dofs)}
-    vec = {}
-    wp = np.zeros(len(dofs))
-    wp[idx[problem.force]] = 1.0
-    vec["wp"] = wp
-    if drive is not None:
-        e = np.zeros(len(dofs))
-        e[idx[drive.motor.rotor]] = 1.0
-        if drive.motor.stator:
-            e[idx[drive.motor.stator]] = -1.0
-        vec["e"] = e
-        if drive.feedback == "linear":
-            f = np.zeros(len(dofs))
-            f[idx[drive.encoder]] = 1.0
-        else:
-            f = drive.ratio * e
-        vec["f"] = f
-    return dofs, vec
-
-
-def _port_data(problem: TuningProblem, omega: np.ndarray) -> _PortData:
-    dofs, vec = _port_vectors(problem)
-    rec = frequency.modal_receptance(problem.structure, omega, dofs, dofs)  # (p, p, K)
-    rec = np.moveaxis(rec, -1, 0)  # (K, p, p)
-    n_p = len(problem.pads)
-    pad_idx = [dofs.index(p) for p in problem.pads]
-    names = list(vec)
-    pairs, alpha = {}, {}
-    if n_p:
-        r_pp = rec[:, pad_idx][:, :, pad_idx]
-        lam, u = np.linalg.eig(r_pp)
-        u_inv = np.linalg.inv(u)
-    else:
-        lam = np.zeros((omega.size, 0))
-    rec_b = {b: rec @ vec[b] for b in names}  # (K, p)
-    for a in names:
-        for b in names:
-            pairs[(a, b)] = rec_b[b] @ vec[a]
-            if n_p:
-                left = np.einsum("kp,kpq->kq", (vec[a] @ rec)[:, pad_idx], u)
-                right = np.einsum("kqp,kp->kq", u_inv, rec_b[b][:, pad_idx])
-                alpha[(a, b)] = left * right
-    return _PortData(omega, pairs, alpha, lam, n_p)
-
-
-def _responses(problem: TuningProblem, data: _PortData, design) -> dict:
-    """Compliance, loop transfer functions as _Cx over the grid, for numeric or symbolic
-    design values (a mapping with keys c, kv, kp, ti)."""
-    s = _Cx(np.zeros_like(data.omega), data.omega)
-    z = None
-    if data.n_pads:
-        z = (problem.contact_stiffness + s * design["c"]) / data.n_pads
-
-    def rc(a, b):
-        out = _Cx.of(data.pairs[(a, b)])
-        if z is not None:
-            for i in range(data.n_pads):
-                out = out - z * _Cx.of(data.alpha[(a, b)][:, i]) / (
-                    1.0 + z * _Cx.of(data.lam[:, i]))
-        return out
-
-    h_ww = rc("wp", "wp")
-    out = {"compliance": h_ww}
-    drive = problem.drive
-    if drive is None:
-        return out
-    m = drive.motor
-    ci = _Cx.of(np.asarray(drive.current_loop.transfer_function()(1j * data.omega)))
-    filt = _Cx.of(np.asarray(drive.torque_filter()(1j * data.omega)).reshape(-1))
-    cv = design["kp"] * (1.0 + 1.0 / (s * design["ti"]))
-    den = s * m.inductance + m.resistance + ci
-    a = ci * filt * cv
-    b = m.torque_constant * m.back_emf_constant
-    p_phi = rc("e", "e")
-    p_fb = rc("f", "e")
-    k_pos = design["kv"] / drive.ratio
-    out["loop_velocity"] = a * s * p_phi / (den + b * s * p_phi)
-    out["loop_position"] = k_pos * a * p_fb / (den + (a + b) * s * p_phi)
-    torque = -(a * k_pos * rc("f", "wp") + (a + b) * s * rc("e", "wp")) / (
-        den + a * k_pos * p_fb + (a + b) * s * p_phi)
-    out["compliance"] = h_ww + rc("wp", "e") * torque
-    return out
-
-
-# --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Performance:
     """What a design achieves (SI): compliance peak [m/N] at [rad/s], b_crit [m], the Ms and
@@ -437,49 +44,6 @@ class Performance:
         }
 
 
-def _grid(lo: float, hi: float, n: int) -> np.ndarray:
-    return np.geomspace(lo, hi, n)
-
-
-class ResponseModel:
-    """The port-coupled responses of a problem on a fixed frequency grid, for many designs.
-
-    The structure's port receptances and their pad eigen-decompositions are computed once;
-    each call then costs a few vectorised complex operations.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from servotune.structure import ModalModel
-    >>> s = ModalModel([[5000.0, 0], [0, 1500.0]], [[16e6, -16e6], [-16e6, 16e6]],
-    ...                ["pad1.x", "wp.x"], damping_ratio=0.0)
-    >>> model = ResponseModel(TuningProblem(s, ["pad1.x"], c=4.912e5), [111.81])
-    >>> round(float(abs(model(Design(c=4.912e5))["compliance"][0])) * 16e6, 3)  # g(0.3), Eq 7
-    5.813
-    """
-
-    def __init__(self, problem: TuningProblem, omega):
-        self.problem = problem
-        self.data = _port_data(problem, np.asarray(omega, dtype=float))
-
-    @property
-    def omega(self) -> np.ndarray:
-        return self.data.omega
-
-    def __call__(self, design: Design) -> dict:
-        """``{"omega", "compliance", "loop_velocity", "loop_position"}`` as complex arrays."""
-        res = _responses(self.problem, self.data, design.to_dict())
-        return {"omega": self.data.omega, **{k: v.value() for k, v in res.items()}}
-
-
-def evaluate(problem: TuningProblem, design: Design, omega=None) -> dict:
-    """The port-coupled responses of a design on a grid (numpy), as complex arrays."""
-    req = problem.requirements
-    if omega is None:
-        omega = np.unique(np.concatenate([_grid(*req.band, 2000), _grid(*req.loop_band, 2000)]))
-    return ResponseModel(problem, omega)(design)
-
-
 def verify(problem: TuningProblem, design: Design) -> Performance:
     """Performance of a design from the interconnected python-control plant, on dense grids
     that the optimiser never uses.
@@ -498,14 +62,14 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
     ratio = (req.band[1] / req.band[0]) ** (1.0 / (n - 1))
     omega = req.band[0] * ratio ** (np.arange(n) + 1.0 / 3.0)
     omega = omega[omega <= req.band[1]]
-    from .structure.model import signal_name
+    from ..structure.model import signal_name
 
     h = frequency.compliance(plant, omega, force=signal_name(problem.force, "f_"),
                              output=signal_name(problem.force))
     peak, w_peak = frequency.peak(omega, h)
     b_crit = min_real = None
     if problem.chatter is not None:
-        from .chatter import critical_depth
+        from ..chatter import critical_depth
 
         oriented = problem.chatter.mu * h.real
         b_crit = critical_depth(oriented, problem.chatter.kt, omega)
@@ -627,8 +191,8 @@ class _Solver:
         # constraints, building the exact Hessian of the Lagrangian costs more than it saves
         lo = [math.log(problem.bounds[v][0] / self.scale[v]) for v in self.free]
         hi = [math.log(problem.bounds[v][1] / self.scale[v]) for v in self.free]
-        self.lbx = np.array(lo + [0.0, -ca.inf])
-        self.ubx = np.array(hi + [ca.inf, ca.inf])
+        self.lbx = np.array([*lo, 0.0, -ca.inf])
+        self.ubx = np.array([*hi, ca.inf, ca.inf])
         self.w_peak, self.w_chatter = w_peak, w_chatter
 
     def solve(self, design: Design, t0: float, q0: float, region: float | None = None):
@@ -640,7 +204,7 @@ class _Solver:
             n = len(p0)
             lbx[:n] = np.maximum(lbx[:n], np.array(p0) - region)
             ubx[:n] = np.minimum(ubx[:n], np.array(p0) + region)
-        sol = self.solver(x0=np.array(p0 + [t0, q0]), lbx=lbx, ubx=ubx,
+        sol = self.solver(x0=np.array([*p0, t0, q0]), lbx=lbx, ubx=ubx,
                           lbg=self.lbg, ubg=self.ubg)
         stats = self.solver.stats()
         x = np.array(sol["x"]).ravel()

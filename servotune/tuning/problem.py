@@ -1,0 +1,193 @@
+"""The tuning problem: design variables, bounds, objectives and requirements (SI)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from ..drive import Drive, PIController
+from ..requirements import Requirements
+from ..structure.model import ModalModel
+
+__all__ = ["VARIABLES", "ChatterTarget", "Design", "RequirementsNotMetError", "TuningProblem"]
+
+VARIABLES = ("c", "kv", "kp", "ti")
+HZ = 1.0 / (2.0 * math.pi)
+
+
+class RequirementsNotMetError(ValueError):
+    """The requirements cannot be met within the bounds (names the binding constraint)."""
+
+
+@dataclass(frozen=True)
+class ChatterTarget:
+    """Chatter-limit objective in the oriented one-direction zero-order form.
+
+    With only the feed direction flexible, the oriented FRF is ``Phi = mu G`` (G the work-piece
+    compliance, mu the directional factor of the milling set-up) and the limiting depth is
+    ``b_lim = -1 / (2 Kt Re Phi)`` at the chatter frequency; the absolute limit is
+    ``b_crit = -1 / (2 Kt min_w Re Phi)`` (Tlusty; Altintas and Budak 1995; see
+    :mod:`servotune.chatter.zoa`).
+
+    Parameters
+    ----------
+    kt : float
+        Tangential cutting coefficient [N/m^2] (> 0).
+    mu : float
+        Directional factor mu = D_xx/Kt [-] (non-zero; may be negative).
+    required_depth : float, optional
+        Required axial depth [m]; the margin is b_crit / required_depth.
+
+    Examples
+    --------
+    A single mode of stiffness k and damping zeta has min Re G = -1/(4 k zeta (1 + zeta)), so
+    Tlusty's b_crit = 2 k zeta (1 + zeta) / (Kt mu):
+
+    >>> k, zeta, target = 1e7, 0.02, ChatterTarget(kt=6e8, mu=0.5)
+    >>> b = target.b_crit(target.mu * -1.0 / (4 * k * zeta * (1 + zeta)))
+    >>> round(b / (2 * k * zeta * (1 + zeta) / (6e8 * 0.5)), 12)
+    1.0
+    """
+
+    kt: float
+    mu: float
+    required_depth: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (self.kt > 0 and math.isfinite(self.kt)):
+            raise ValueError(f"ChatterTarget.kt must be finite and > 0 N/m^2, got {self.kt!r}")
+        if not (math.isfinite(self.mu) and self.mu != 0):
+            raise ValueError(f"ChatterTarget.mu must be finite and non-zero, got {self.mu!r}")
+        if self.required_depth is not None and not self.required_depth > 0:
+            raise ValueError("ChatterTarget.required_depth must be > 0 m")
+
+    @classmethod
+    def from_setup(cls, setup, direction: str = "x", required_depth: float | None = None):
+        """From a :class:`~servotune.chatter.MillingSetup` (flexible direction ``x`` or ``y``)."""
+        from ..chatter import directional_factor
+
+        return cls(setup.kt, directional_factor(setup, direction), required_depth)
+
+    def b_crit(self, min_real: float) -> float:
+        """b_crit [m] from the most negative real part of the ORIENTED FRF mu G [m/N]."""
+        return math.inf if min_real >= 0 else -1.0 / (2.0 * self.kt * min_real)
+
+    def margin(self, b_crit: float) -> float | None:
+        """b_crit over the required depth (None without a requirement)."""
+        return None if self.required_depth is None else b_crit / self.required_depth
+
+
+@dataclass(frozen=True)
+class Design:
+    """Values of the design variables (SI): C [N s/m] (axis total), Kv [1/s], Kp [N m s/rad],
+    Ti [s]. Variables without a drive may be None."""
+
+    c: float
+    kv: float | None = None
+    kp: float | None = None
+    ti: float | None = None
+
+    def to_dict(self) -> dict:
+        return {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
+
+
+@dataclass(frozen=True)
+class TuningProblem:
+    """A tuning problem on a structure with viscous guide-way pads and, optionally, a drive.
+
+    Parameters
+    ----------
+    structure : ModalModel
+    pads : sequence of str
+        Pad DOFs where the guide-way damping C acts (shared equally).
+    c : float
+        Initial guide-way damping C [N s/m] (axis total).
+    drive : Drive, optional
+        Initial drive (its Kv, velocity Kp and Ti are the initial gains).
+    free : sequence of str
+        Which of ``("c", "kv", "kp", "ti")`` the optimiser may change.
+    bounds : dict, optional
+        ``{name: (low, high)}`` in SI; defaults: a factor 100 either way of the initial value.
+    requirements : Requirements
+    chatter : ChatterTarget, optional
+    weights : (float, float)
+        Weights of (compliance peak / initial peak, initial b_crit / b_crit) in the objective.
+    tracking_weight : float
+        Weight of Kv0/Kv in the objective when Kv is free: the compliance barely depends on
+        Kv, so without it Kv would be left anywhere the constraints allow; with it Kv goes as
+        high as the position-loop Ms allows (tracking accuracy grows with Kv).
+    contact_stiffness : float
+        Fixed total contact stiffness at the pads [N/m] (0 for purely viscous pads).
+    force : str
+        Work-piece DOF where the cutting force acts and the compliance is taken.
+    n_grid : int
+        Initial number of grid frequencies (the exchange refinement adds more).
+    """
+
+    structure: ModalModel
+    pads: tuple[str, ...]
+    c: float
+    drive: Drive | None = None
+    free: tuple[str, ...] = ("c",)
+    bounds: dict = field(default_factory=dict)
+    requirements: Requirements = field(default_factory=Requirements)
+    chatter: ChatterTarget | None = None
+    weights: tuple[float, float] = (1.0, 0.0)
+    tracking_weight: float = 0.05
+    contact_stiffness: float = 0.0
+    force: str = "wp.x"
+    n_grid: int = 60
+
+    def __post_init__(self) -> None:
+        pads = tuple(self.pads)
+        self.structure.index([*list(pads), self.force])
+        object.__setattr__(self, "pads", pads)
+        free = tuple(dict.fromkeys(self.free))
+        unknown = [v for v in free if v not in VARIABLES]
+        if unknown:
+            raise ValueError(f"unknown design variables {unknown}; choose from {VARIABLES}")
+        if self.drive is None and set(free) - {"c"}:
+            raise ValueError(f"free variables {sorted(set(free) - {'c'})} need a drive")
+        if "c" in free and not pads:
+            raise ValueError("tuning C needs the pad DOFs (pads=...)")
+        if not free:
+            raise ValueError("no free design variables")
+        object.__setattr__(self, "free", free)
+        if not (self.c >= 0 and math.isfinite(self.c)):
+            raise ValueError(f"the initial damping c must be finite and >= 0, got {self.c!r}")
+        if "c" in free and self.c <= 0:
+            raise ValueError("a free damping C needs a positive initial value")
+        w_peak, w_chatter = (float(w) for w in self.weights)
+        if w_peak < 0 or w_chatter < 0 or w_peak + w_chatter == 0:
+            raise ValueError("weights must be >= 0 and not both zero")
+        if not (self.tracking_weight >= 0 and math.isfinite(self.tracking_weight)):
+            raise ValueError("tracking_weight must be finite and >= 0")
+        if w_chatter > 0 and self.chatter is None:
+            raise ValueError("a chatter weight needs a ChatterTarget (chatter=...)")
+        design = self.initial_design()
+        checked = {}
+        for name in VARIABLES:
+            value = getattr(design, name)
+            lo, hi = self.bounds.get(name, (value / 100.0, value * 100.0) if value else (0, 0))
+            if name in free and not (0 < lo <= value <= hi < math.inf):
+                raise ValueError(f"bounds of {name} must satisfy 0 < low <= initial <= high, got "
+                                 f"({lo!r}, {hi!r}) with initial {value!r}")
+            checked[name] = (float(lo), float(hi))
+        object.__setattr__(self, "bounds", checked)
+
+    def initial_design(self) -> Design:
+        d = self.drive
+        if d is None:
+            return Design(c=float(self.c))
+        return Design(c=float(self.c), kv=d.kv, kp=d.velocity_loop.kp, ti=d.velocity_loop.ti)
+
+    def drive_for(self, design: Design) -> Drive | None:
+        """The drive with a design's gains."""
+        if self.drive is None:
+            return None
+        return replace(self.drive, kv=design.kv,
+                       velocity_loop=PIController(kp=design.kp, ti=design.ti))
+
+
+# --------------------------------------------------------------------------------------------
+# complex arithmetic on (re, im) pairs of numpy arrays or casadi expressions
