@@ -325,7 +325,7 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
 def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
               starts: int = 4, bounds: dict | None = None, seed: int = 0,
               tolerance: float | None = None, simulate: bool = False,
-              executor=None) -> AxisTuning:
+              executor=None, sweep_duration: float = 20.0) -> AxisTuning:
     """Tune an axis and gather the before/after analyses.
 
     Parameters
@@ -366,5 +366,6 @@ def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 
             out["mode_peaks"] = mode_peaks_vs_damping(
                 axis, np.geomspace(lo, hi, 41), after_drive, result.design.c)
         if simulate:
-            out["nonlinear"] = nonlinear_check(axis, result.design, executor=executor)
+            out["nonlinear"] = nonlinear_check(axis, result.design, duration=sweep_duration,
+                                               executor=executor)
     return AxisTuning(**out)

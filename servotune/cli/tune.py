@@ -42,6 +42,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--starts", type=int, default=4, help="starting points (default 4)")
     p.add_argument("--no-simulation", action="store_true",
                    help="skip the nonlinear LuGre verification sweeps")
+    p.add_argument("--sweep-duration", type=float, default=20.0,
+                   help="duration of each nonlinear sweep 10 -> 100 Hz [s] (default 20, as the "
+                        "paper's Table 3)")
     p.add_argument("--workers", type=int, default=None,
                    help="processes for the nonlinear sweeps (default: as many as CPUs, "
                         "1 = serial)")
@@ -72,7 +75,8 @@ def run(args) -> int:
         executor = ProcessPoolExecutor(max_workers=args.workers)
     try:
         job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
-                        starts=args.starts, simulate=simulate, executor=executor)
+                        starts=args.starts, simulate=simulate, executor=executor,
+                        sweep_duration=args.sweep_duration)
     finally:
         if executor is not None:
             executor.shutdown()
