@@ -52,6 +52,7 @@ __all__ = [
     "TABLE_AXIS_FRICTION",
     "TABLE_AXIS_NOISE",
     "build_table_axis",
+    "files",
     "frf_rows",
     "stribeck_rows",
     "write_all",
