@@ -35,9 +35,11 @@ __all__ = [
 
 HZ = 1.0 / (2.0 * math.pi)
 
-#: Default search bounds (SI); ``kp`` is relative to the initial value.
+#: Default search bounds (SI); ``kp`` is relative to the initial value. Ti stays at or below
+#: 0.2 s so that the velocity loop keeps its integral action (the compliance peak barely depends
+#: on Ti above that, which would leave Ti undetermined).
 DEFAULT_BOUNDS = {"c": (1e3, 1e8), "kv": (1.0, 300.0), "kp_factor": (0.01, 100.0),
-                  "ti": (1e-3, 1.0)}
+                  "ti": (1e-3, 0.2)}
 
 
 def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
@@ -55,7 +57,8 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     bounds : dict, optional
         ``{name: (low, high)}`` overriding :data:`DEFAULT_BOUNDS`.
     c0 : float, optional
-        Initial C [N s/m]; default the axis' viscous guide-way damping.
+        Initial C [N s/m]; default the axis' viscous guide-way damping, moved into the bounds
+        when outside them.
     """
     if not 0.0 <= chatter_weight <= 1.0:
         raise ValueError(f"chatter_weight must lie in [0, 1], got {chatter_weight!r}")
@@ -70,6 +73,8 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
         axis.require_cutting()
     b = dict(DEFAULT_BOUNDS, **(bounds or {}))
     problem_bounds = {"c": b["c"]}
+    if "c" in free:  # start inside the bounds (the axis' value is the "before" design only)
+        c0 = min(max(c0, b["c"][0]), b["c"][1])
     if drive is not None:
         kp0 = drive.velocity_loop.kp
         problem_bounds.update(
@@ -322,14 +327,19 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
 
 
-def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
+def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
               starts: int = 4, bounds: dict | None = None, seed: int = 0,
               tolerance: float | None = None, simulate: bool = False,
-              executor=None, sweep_duration: float = 20.0) -> AxisTuning:
+              executor=None, sweep_duration: float = 20.0,
+              c0: float | None = None) -> AxisTuning:
     """Tune an axis and gather the before/after analyses.
 
     Parameters
     ----------
+    free, chatter_weight, bounds : optional
+        Override the axis' ``[tuning]`` settings (see :func:`tuning_problem`).
+    c0 : float, optional
+        Initial guide-way damping [N s/m]; default the axis' viscous value.
     simulate : bool
         Also run the nonlinear check (:func:`nonlinear_check`) of the tuned design.
     executor : concurrent.futures.Executor, optional
@@ -340,7 +350,11 @@ def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 
     RequirementsNotMetError, UnstableLoopError, AxisFormatError
         As :func:`servotune.tuning.tune` and the axis loader.
     """
-    problem = tuning_problem(axis, free, chatter_weight, bounds)
+    settings = axis.tuning
+    free = settings.free if free is None else free
+    chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight
+    bounds = {**settings.bounds, **(bounds or {})}
+    problem = tuning_problem(axis, free, chatter_weight, bounds, c0)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
         tolerance = 1e-10 if two_mass else 1e-6

@@ -132,6 +132,14 @@ gain_margin_min_db = 6.0
 # kv_min_m_per_min_per_mm = 1.0     # smallest Kv the tuning may choose
 band_hz = [5.0, 300.0]              # band of the compliance-peak objective [Hz]
 depth_required = 2.0e-3             # required axial depth of cut [m]
+
+[tuning]                            # what `servotune tune` may change, and within which bounds
+free = ["c", "kv", "kp", "ti"]      # guide-way damping C, Kv, velocity-loop Kp and Ti
+c = [1.0e3, 1.0e8]                  # [N s/m] (axis total over the pads)
+kv = [1.0, 300.0]                   # [1/s]
+# kp = [0.04, 370.0]                # [N m s/rad] (default: a factor 100 around the initial kp)
+ti = [1.0e-3, 0.2]                  # [s]; <= 0.2 s keeps integral action in the velocity loop
+chatter_weight = 0.0                # 0: compliance peak only; 1: chatter limit only
 '''
 
 

@@ -123,3 +123,23 @@ def test_unreachable_requirement_is_named_and_nothing_written(starter, tmp_path,
                  "--no-simulation"]) == 1
     assert "Ms velocity loop" in capsys.readouterr().err
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_tuning_section_sets_free_variables_and_bounds(starter, tmp_path):
+    folder = tmp_path / "axis"
+    shutil.copytree(starter, folder)
+    text = (folder / "axis.toml").read_text()
+    text = text.replace('free = ["c", "kv", "kp", "ti"]', 'free = ["c", "kp"]')
+    text = text.replace("c = [1.0e3, 1.0e8]", "c = [2.0e4, 5.0e4]")
+    (folder / "axis.toml").write_text(text)
+    axis = load_axis(folder)
+    assert axis.tuning.free == ("c", "kp") and axis.tuning.bounds["c"] == (2e4, 5e4)
+    from servotune.design import tune_axis
+
+    job = tune_axis(axis, starts=1)
+    assert job.result.problem.free == ("c", "kp")
+    assert 2e4 * (1 - 1e-6) <= job.design.c <= 5e4 * (1 + 1e-6)  # IPOPT bound tolerance
+    assert job.design.kv == axis.drive.kv  # not free: unchanged
+    (folder / "axis.toml").write_text(text.replace("c = [2.0e4, 5.0e4]", "c = [5.0e4, 2.0e4]"))
+    with pytest.raises(AxisFormatError, match=r"\[tuning\] c"):
+        load_axis(folder)

@@ -34,11 +34,12 @@ def add_parser(subparsers) -> None:
                     "and figures. On a two-mass axis (models/two_mass_fig5) the tuned C is "
                     "checked against the closed-form fixed-point optimum Copt.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
-    p.add_argument("--free", type=_free, default=VARIABLES,
-                   help="design variables the optimiser may change (default c,kv,kp,ti)")
-    p.add_argument("--chatter-weight", type=float, default=0.0,
+    p.add_argument("--free", type=_free, default=None,
+                   help="design variables the optimiser may change (default: [tuning] free "
+                        "of the axis, else c,kv,kp,ti)")
+    p.add_argument("--chatter-weight", type=float, default=None,
                    help="weight in [0, 1] of the chatter limit against the compliance peak "
-                        "(default 0)")
+                        "(default: [tuning] chatter_weight of the axis, else 0)")
     p.add_argument("--starts", type=int, default=4, help="starting points (default 4)")
     p.add_argument("--no-simulation", action="store_true",
                    help="skip the nonlinear LuGre verification sweeps")
