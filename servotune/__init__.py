@@ -5,6 +5,25 @@ Procedia CIRP 21 (2014) 367-372.
 Use as ``import servotune as st``. SI units throughout (m, N, s, kg, rad).
 """
 
+# structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
+from . import analysis, design
+from .axis import Axis, AxisFormatError, Cutting, load_axis
+
+# chatter: stability lobes (servotune.chatter)
+from .chatter import (
+    MillingSetup,
+    Mode,
+    StabilityLobes,
+    StabilityMap,
+    absolute_stability_limit,
+    chatter_margin,
+    critical_depth,
+    modal_compliance,
+    read_frf_csv,
+    sdm_lobes,
+    stability_lobes,
+    stability_map,
+)
 from .drive import (
     Drive,
     LowPassFilter,
@@ -25,9 +44,6 @@ from .frequency import (
     modal_receptance,
     port_compliance,
 )
-from .plant import Contact, GuideWayFriction, UnstableLoopError, build_plant, loop_transfer
-from .requirements import Requirements
-from .structure import ModalModel, UnknownDofError
 from .friction import (
     BIANCHI2014,
     CANUDAS1995,
@@ -50,29 +66,32 @@ from .friction.equivalent import (
     stiction_describing_function,
 )
 from .friction.identify import FrictionFit, fit_presliding, fit_steady_state
-# chatter: stability lobes (servotune.chatter)
-from .chatter import (
-    MillingSetup,
-    Mode,
-    StabilityLobes,
-    StabilityMap,
-    absolute_stability_limit,
-    chatter_margin,
-    critical_depth,
-    modal_compliance,
-    read_frf_csv,
-    sdm_lobes,
-    stability_lobes,
-    stability_map,
-)
+from .plant import Contact, GuideWayFriction, UnstableLoopError, build_plant, loop_transfer
+from .requirements import Requirements
 
-# structure: Craig-Bampton reduction, matrix files, builder; axis descriptions
-from . import analysis, design
-from .axis import Axis, AxisFormatError, Cutting, load_axis
+# simulate
+from .simulate import (
+    LuGreFriction,
+    NonlinearAxis,
+    PadFriction,
+    Scenario,
+    SimulationError,
+    SimulationResult,
+    SweepEnvelope,
+    ViscousFriction,
+    WindowEnergies,
+    circle,
+    constant_speed,
+    point_to_point,
+    sine_sweep,
+    sinusoid,
+)
 from .structure import (
     CraigBamptonCheck,
     MatrixFileError,
+    ModalModel,
     StructureBuilder,
+    UnknownDofError,
     cb_check,
     craig_bampton,
     read_structure,
@@ -92,30 +111,14 @@ from .twomass import (
     two_mass_compliance,
 )
 
-# simulate
-from .simulate import (
-    LuGreFriction,
-    NonlinearAxis,
-    PadFriction,
-    Scenario,
-    SimulationError,
-    SimulationResult,
-    SweepEnvelope,
-    ViscousFriction,
-    WindowEnergies,
-    circle,
-    constant_speed,
-    point_to_point,
-    sine_sweep,
-    sinusoid,
-)
-
 # (the function is servotune.simulate.simulate: the name servotune.simulate stays the package)
 
 __version__ = "0.1.0"
 
 __all__ = [
     "__version__",
+    "analysis",
+    "design",
     # drive
     "Drive",
     "LowPassFilter",

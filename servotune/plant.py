@@ -1,4 +1,5 @@
-"""The linearised feed axis: structure, guide-way contacts and the drive in one python-control system.
+"""The linearised feed axis: structure, guide-way contacts and the drive in one python-control
+system.
 
 :func:`build_plant` interconnects (``control.interconnect``) the reduced structure
 (:class:`~servotune.structure.ModalModel`), one linear contact element per guide-way pad

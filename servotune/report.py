@@ -239,6 +239,7 @@ def tuning_report_html(job) -> str:
     figs = "".join(f"<h3>{html.escape(title)}</h3><img alt='{html.escape(title)}' "
                    f"src='data:image/png;base64,{_figure_png(fig)}'/>" for title, fig in figures)
     active = html.escape("; ".join(r.active)) or "none"
+    band_hz = [w / 6.283185307179586 for w in r.problem.requirements.band]
     stamp = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>servotune: {html.escape(axis.name)}</title>
@@ -257,7 +258,7 @@ tools", Procedia CIRP 21 (2014). SI units; frequencies in Hz.</p>
 {status}
 <h2>Design</h2>
 <p>Free variables: {", ".join(r.problem.free)}; objective: work-piece compliance peak over
-{r.problem.requirements.band[0] / 6.283185307179586:.3g}&ndash;{r.problem.requirements.band[1] / 6.283185307179586:.3g} Hz
+{band_hz[0]:.3g}&ndash;{band_hz[1]:.3g} Hz
 (weight {r.problem.weights[0]:g}) and chatter limit (weight {r.problem.weights[1]:g});
 Ms limits: velocity {r.problem.requirements.ms_limit("velocity"):.3f}, position
 {r.problem.requirements.ms_limit("position"):.3f}. Active at the optimum: {active}.

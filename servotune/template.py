@@ -66,8 +66,10 @@ modal_damping = 0.03                # damping ratio of every mode (or a list, on
 #   mass = "M.mtx"
 #   stiffness = "K.mtx"
 #   dof_map = "dofs.csv"            # one DOF name per matrix row (header "name")
-#   reduce = {{ boundary = ["pad1.x", "pad2.x", "wp.x", "wp.y", "wp.z", "motor.rotor",
-#                         "motor.stator", "encoder.x"], n_modes = 30 }}   # or f_max_hz = 500.0
+#   [structure.reduce]              # (a sub-table: an inline table cannot span lines)
+#   boundary = ["pad1.x", "pad2.x", "wp.x", "wp.y", "wp.z", "motor.rotor", "motor.stator",
+#               "encoder.x"]
+#   n_modes = 30                    # or f_max_hz = 500.0
 # DOF names: pad<i>.x = relative X at a guide-way pad (slide minus guide way), wp.x/y/z = the
 # work-piece point, motor.rotor/motor.stator = rotations, encoder.x = linear-encoder head.
 

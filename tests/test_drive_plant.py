@@ -163,9 +163,9 @@ def test_negative_contact_damping_is_refused():
 
 
 def test_unknown_dofs_are_named():
-    with pytest.raises(UnknownDofError, match="pad9.x"):
+    with pytest.raises(UnknownDofError, match=r"pad9\.x"):
         build_plant(small_axis(), small_drive(), Contact.viscous(1e4), ["pad9.x"])
-    with pytest.raises(UnknownDofError, match="ruler.x"):
+    with pytest.raises(UnknownDofError, match=r"ruler\.x"):
         build_plant(small_axis(), small_drive(encoder="ruler.x"))
 
 

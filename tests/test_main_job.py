@@ -2,15 +2,14 @@
 
 import json
 import shutil
-from pathlib import Path
 
 import pytest
 
 from servotune.axis import AxisFormatError, load_axis
 from servotune.cli import main
 from servotune.design import nonlinear_check
-from servotune.tuning import Design
 from servotune.template import write_template
+from servotune.tuning import Design
 
 
 @pytest.fixture(scope="module")

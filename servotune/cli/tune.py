@@ -116,10 +116,10 @@ def run(args) -> int:
         if a0 is None:
             continue
         print(_row(f"Ms {loop} loop", a0.ms, a1 and a1.ms, "{:.3f}"))
-        print(_row(f"  phase margin [deg]", a0.phase_margin_deg, a1 and a1.phase_margin_deg,
+        print(_row("  phase margin [deg]", a0.phase_margin_deg, a1 and a1.phase_margin_deg,
                    "{:.1f}"))
-        print(_row(f"  gain margin [dB]", a0.gain_margin_db, a1 and a1.gain_margin_db, "{:.1f}"))
-        print(_row(f"  bandwidth [Hz]", a0.bandwidth_hz, a1 and a1.bandwidth_hz, "{:.2f}"))
+        print(_row("  gain margin [dB]", a0.gain_margin_db, a1 and a1.gain_margin_db, "{:.1f}"))
+        print(_row("  bandwidth [Hz]", a0.bandwidth_hz, a1 and a1.bandwidth_hz, "{:.2f}"))
     if job.two_mass is not None:
         t = job.two_mass
         print(f"  two-mass check (sec 4.1): Copt closed form {t.c_opt_analytic:.6e} N s/m, "
