@@ -9,7 +9,7 @@ a ``to_dict()`` for JSON (frequencies also in Hz under ``*_hz`` keys).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import control
 import numpy as np
@@ -171,14 +171,3 @@ def axis_lobes(axis: Axis, contact: Contact, drive: Drive | None = None, omega=N
                                             outputs=[f"wp_{d}"])
     speeds = np.linspace(*cutting.speed_rpm, n_speeds)
     return stability_lobes(frd, cutting.setup, speeds, direction=d)
-
-
-def with_design(drive: Drive, kv: float | None = None, kp: float | None = None,
-                ti: float | None = None) -> Drive:
-    """A drive with new gains (None keeps the current value)."""
-    from .drive import PIController
-
-    vel = drive.velocity_loop
-    return replace(drive, kv=drive.kv if kv is None else kv,
-                   velocity_loop=PIController(vel.kp if kp is None else kp,
-                                              vel.ti if ti is None else ti))
