@@ -491,7 +491,7 @@ def sliding_linearisation(params: LuGreParameters, v0: float) -> control.StateSp
     -3.81
     >>> q = dataclasses.replace(p, sigma1_decay_speed=0.01)
     >>> round(float(sliding_linearisation(q, 0.03).D[0, 0]))
-    5106
+    5107
     """
     v0 = _finite("v0", v0)
     if v0 == 0.0:
