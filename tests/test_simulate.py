@@ -243,8 +243,8 @@ P_VD = dataclasses.replace(P, sigma1_decay_speed=0.01)
 def test_micro_damping_law_gives_the_lugre_force_and_bristle_rate(speed):
     # the compiled remainders fed into the pad block reproduce the numpy model of
     # servotune.friction (force and dz/dt) at random states, whatever the operating point
-    from servotune.simulate.contact import LAW_IDS, evaluate_remainder
     from servotune.friction import lugre_derivative, lugre_force
+    from servotune.simulate.contact import LAW_IDS, evaluate_remainder
     law = LuGreFriction(P_VD)
     assert law.law_id == LAW_IDS["lugre_damping"] and law.n_remainders == 2
     n_pads = 4

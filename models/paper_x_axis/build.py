@@ -282,7 +282,7 @@ fs = 6013.0                     # static friction [N]
 vs = 0.01                       # Stribeck velocity [m/s]
 delta = 1.0                     # Stribeck exponent
 sigma0 = 5.9e9                  # bristle stiffness [N/m]
-sigma1 = 1.6e7                  # bristle damping [N s/m] (printed -1.6e7, which would generate energy)
+sigma1 = 1.6e7                  # [N s/m] (the paper prints -1.6e7, which would generate energy)
 sigma2 = 5578.0                 # viscous friction [N s/m]
 sigma1_decay_speed = 1.0e-3     # v_d [m/s]: sigma1(v) = sigma1 exp(-(v/v_d)^2) (Olsson et al.
                                 # 1998). Below 4 sqrt(2e) Fc/sigma1 = 1.28e-3 m/s, so that

@@ -21,8 +21,9 @@ microseconds on the pads; r holds what is left of the LuGre law, stiff while the
 
   The 2 n_r unknowns R_j = r(y(c_j h)) (n_r = n_pads remainders, or 2 n_pads) are found by
   Newton's method on a system of that size (the pads couple only through their outputs v_p,
-  z_p), so a step costs O(n n_r), not O(n^2) or O(n^3). For the nonlinear part the scheme is the 2-stage Radau IIA collocation:
-  L-stable (the sliding bristles relax in one step without ringing) and stiffly accurate.
+  z_p), so a step costs O(n n_r), not O(n^2) or O(n^3). For the nonlinear part the scheme is
+  the 2-stage Radau IIA collocation: L-stable (the sliding bristles relax in one step without
+  ringing) and stiffly accurate.
 * A step whose Newton iteration does not converge (e.g. at a violent break-away) is redone as
   two half steps, recursively down to 1/64 of the step; below that the integration stops with
   :class:`SimulationError`.

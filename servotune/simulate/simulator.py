@@ -178,7 +178,7 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     xm = np.zeros(m)
     rparams = data["rparams"]
     n_pads_power = len(sysm.pads)
-    # the remainders at rest (v = z = 0), component k for the inputs k n_pads .. (k+1) n_pads
+    # the remainders at rest (v = z = 0); remainder input k is component k // n_pads
     r_last = np.zeros(2 * nr)
     for k in range(nr):
         r_last[k] = r_last[nr + k] = evaluate_remainder(data["law"], k // n_pads_power, 0.0,
