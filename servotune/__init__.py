@@ -110,6 +110,9 @@ from .simulate import (
     sinusoid,
 )
 
+# friction: velocity-dependent micro-damping (servotune.friction.lugre)
+from .friction import micro_damping
+
 # (the function is servotune.simulate.simulate: the name servotune.simulate stays the package)
 
 __version__ = "0.1.0"
@@ -217,4 +220,6 @@ __all__ = [
     "point_to_point",
     "sine_sweep",
     "sinusoid",
+    # friction: velocity-dependent micro-damping
+    "micro_damping",
 ]
