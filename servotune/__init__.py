@@ -111,6 +111,8 @@ from .twomass import (
     two_mass_compliance,
 )
 
+# friction: velocity-dependent micro-damping (servotune.friction.lugre)
+from .friction import micro_damping
 # (the function is servotune.simulate.simulate: the name servotune.simulate stays the package)
 
 __version__ = "0.1.0"
@@ -220,4 +222,6 @@ __all__ = [
     "point_to_point",
     "sine_sweep",
     "sinusoid",
+    # friction: velocity-dependent micro-damping
+    "micro_damping",
 ]

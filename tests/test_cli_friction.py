@@ -37,9 +37,25 @@ def test_friction_text_output(tmp_path, capsys):
     assert not any(tmp_path.iterdir())
 
 
+def test_friction_with_micro_damping(tmp_path, capsys):
+    # large strokes at 20 Hz (v up to 0.63 m/s >> vs, v_d): Coulomb plus viscous (the
+    # classical describing function of a Coulomb slider, 4 Fc / (pi w A), plus sigma2)
+    assert main(["friction", "--amplitude", "5e-3", "--sigma1-decay-speed", "1e-3", "--json",
+                 "--no-plots", "--out", str(tmp_path)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["parameters"]["sigma1_decay_speed"] == 1e-3
+    w = 2 * math.pi * 20.0
+    coulomb = 4 * BIANCHI2014.fc / (math.pi * w * 5e-3) + BIANCHI2014.sigma2
+    assert result["ceq_lugre"] == pytest.approx(coulomb, rel=0.03)
+    assert main(["friction", "--sigma1-decay-speed", "1e-3", "--no-plots", "--out",
+                 str(tmp_path)]) == 0
+    assert "sigma1 decay speed = 0.001 m/s" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("argv, message", [
     (["friction", "--amplitude=-1e-6"], "--amplitude"),
     (["friction", "--frequency-hz", "0"], "--frequency-hz"),
+    (["friction", "--sigma1-decay-speed", "0"], "sigma1_decay_speed"),
 ])
 def test_friction_bad_input(argv, message, tmp_path, capsys):
     assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 1

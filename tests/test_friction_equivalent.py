@@ -1,6 +1,7 @@
 """Equivalent viscous damping: the stiction cycle against an exactly integrated elasto-plastic
 element, the LuGre describing function against closed forms and its limits."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -166,3 +167,40 @@ def test_paper_values_at_1_2_5_um():
                     / (math.pi * W20 * amplitude[1:] ** 2), rtol=1e-14)
     ceq, _ = equivalent.describing_function(BIANCHI2014, amplitude, W20)
     assert np.all(ceq > closed)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(fc=st.floats(0.1, 1e4), fs_ratio=st.floats(1.0, 5.0), vs=st.floats(1e-4, 1e-1),
+       delta=st.floats(0.5, 2.5), sigma0=st.floats(1e3, 1e10), sigma1=st.floats(0.0, 1e8),
+       sigma2=st.floats(0.0, 1e4), vd_ratio=st.floats(1e-3, 1e3),
+       amp_ratio=st.floats(0.01, 100.0), omega=st.floats(0.1, 1e4))
+def test_dissipated_energy_with_micro_damping_is_never_negative(
+        fc, fs_ratio, vs, delta, sigma0, sigma1, sigma2, vd_ratio, amp_ratio, omega):
+    # sigma1(v) = sigma1 exp(-(v/v_d)^2) with v_d from 1e-3 to 1e3 Stribeck velocities
+    p = LuGreParameters(fc=fc, fs=fc * fs_ratio, vs=vs, delta=delta, sigma0=sigma0,
+                        sigma1=sigma1, sigma2=sigma2, sigma1_decay_speed=vd_ratio * vs)
+    amplitude = amp_ratio * p.fs / p.sigma0
+    ceq, _ = equivalent.describing_function(p, amplitude, omega, n_steps=256)
+    assert ceq >= 0.0
+
+
+def test_describing_function_with_micro_damping_limits():
+    p = dataclasses.replace(BIANCHI2014, sigma1_decay_speed=1e-3)
+    # tiny motions (v << v_d): the presliding contact with the full sigma1
+    amplitude = np.array([1e-11, 1e-10])
+    ceq, keq = equivalent.describing_function(p, amplitude, W20)
+    eps = amplitude * p.sigma0 / p.fs
+    assert np.all(np.abs(ceq / (p.sigma1 + p.sigma2) - 1.0) < 2 * eps)
+    assert np.all(np.abs(keq / p.sigma0 - 1.0) < 2 * eps)
+    # v_d -> infinity: the constant-sigma1 describing function
+    huge = dataclasses.replace(BIANCHI2014, sigma1_decay_speed=1e9)
+    a = np.geomspace(1e-7, 1e-4, 7)
+    for x, y in zip(equivalent.describing_function(huge, a, W20),
+                    equivalent.describing_function(BIANCHI2014, a, W20), strict=True):
+        assert_allclose(x, y, rtol=1e-12)
+    # large strokes (v >> v_d): the bristle damping drops out, Coulomb plus viscous remain
+    big = 5e-3
+    omega = np.array([W20, 10 * W20])
+    ceq, _ = equivalent.describing_function(p, big, omega, n_steps=4096)
+    coulomb = 4 * p.fc / (math.pi * omega * big) + p.sigma2
+    assert_allclose(ceq, coulomb, rtol=0.02)

@@ -300,3 +300,192 @@ def test_canudas_stick_slip_benchmark():
     # sticking phases: the mass nearly stops while the spring end moves on
     assert np.min(np.abs(v[late])) < 0.01 * vp
     assert np.max(v[late]) > 2.0 * vp                # and slips fast
+
+
+# ---------------------------------------------------------------- velocity-dependent micro-damping
+# sigma1(v) = sigma1 exp(-(v/v_d)^2) (Olsson et al. 1998), written out here for the references
+
+def s1_ref(p, v):
+    return p.sigma1 * np.exp(-(np.asarray(v) / p.sigma1_decay_speed) ** 2)
+
+
+BIANCHI_VD = dataclasses.replace(BIANCHI2014, sigma1_decay_speed=0.01)
+CANUDAS_VD = dataclasses.replace(CANUDAS1995, sigma1_decay_speed=2e-3)
+HUGE_VD = 1e9  # exp(-(v/v_d)^2) = 1 to 1e-21 for |v| < 0.1 m/s
+
+
+@pytest.mark.parametrize("value, match", [
+    (0.0, "> 0"), (-0.01, "> 0"), (math.nan, "finite"), (math.inf, "finite"),
+    (True, "speed")])
+def test_bad_decay_speed_is_refused(value, match):
+    with pytest.raises(ValueError, match=match):
+        dataclasses.replace(BIANCHI2014, sigma1_decay_speed=value)
+
+
+def test_decay_speed_is_kept_by_scaling_and_in_the_dictionary():
+    p = BIANCHI_VD
+    assert p.sigma1_decay_speed == 0.01 and BIANCHI2014.sigma1_decay_speed is None
+    assert p.scaled(0.25).sigma1_decay_speed == 0.01      # a speed: not shared by the pads
+    assert p.to_dict()["sigma1_decay_speed"] == 0.01
+    assert BIANCHI2014.to_dict()["sigma1_decay_speed"] is None
+    assert LuGreParameters(**p.to_dict()) == p            # round trip (as axis.toml does)
+    assert p != BIANCHI2014 and dataclasses.replace(p, sigma1_decay_speed=None) == BIANCHI2014
+    assert LuGreParameters(**{**BIANCHI2014.to_dict(), "sigma1_decay_speed": "0.01"}) == p
+
+
+def test_force_with_micro_damping_is_the_defining_sum():
+    rng = np.random.default_rng(11)
+    p = BIANCHI_VD
+    v = rng.uniform(-5, 5, 50) * p.vs
+    z = rng.uniform(-1.2, 1.2, 50) * p.fs / p.sigma0
+    zdot = v - p.sigma0 * np.abs(v) * z / g_ref(p, v)
+    expected = p.sigma0 * z + s1_ref(p, v) * zdot + p.sigma2 * v
+    assert_allclose(lugre.lugre_force(p, z, v), expected, rtol=1e-12, atol=1e-9 * p.fs)
+    assert_allclose(lugre.micro_damping(p, v), s1_ref(p, v), rtol=1e-15)
+    assert_allclose(lugre.micro_damping(BIANCHI2014, v), BIANCHI2014.sigma1, rtol=0)
+
+
+@pytest.mark.parametrize("p", [BIANCHI_VD, CANUDAS_VD], ids=["bianchi", "canudas"])
+def test_jacobian_with_micro_damping_matches_central_differences(p):
+    rng = np.random.default_rng(8)
+    v = rng.uniform(-5, 5, 30) * p.vs
+    z = rng.uniform(-1.5, 1.5, 30) * p.fs / p.sigma0
+    j = lugre.lugre_jacobian(p, z, v)
+    hz, hv = 1e-6 * p.fs / p.sigma0, 1e-6 * p.vs
+    fd_z = (lugre.lugre_force(p, z + hz, v) - lugre.lugre_force(p, z - hz, v)) / (2 * hz)
+    fd_v = (lugre.lugre_force(p, z, v + hv) - lugre.lugre_force(p, z, v - hv)) / (2 * hv)
+    assert_allclose(j.dforce_dz, fd_z, rtol=1e-6, atol=1e-9 * np.max(np.abs(fd_z)))
+    assert_allclose(j.dforce_dv, fd_v, rtol=1e-5, atol=1e-7 * np.max(np.abs(fd_v)))
+
+
+def test_huge_decay_speed_is_the_constant_sigma1():
+    p = dataclasses.replace(BIANCHI2014, sigma1_decay_speed=HUGE_VD)
+    rng = np.random.default_rng(3)
+    v = rng.uniform(-10, 10, 40) * p.vs
+    z = rng.uniform(-1, 1, 40) * p.fs / p.sigma0
+    assert_allclose(lugre.lugre_force(p, z, v), lugre.lugre_force(BIANCHI2014, z, v),
+                    rtol=1e-12, atol=1e-12 * p.fs)
+    for a, b in zip(lugre.lugre_jacobian(p, z, v), lugre.lugre_jacobian(BIANCHI2014, z, v),
+                    strict=True):
+        assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.max(np.abs(b)))
+    for v0 in (-0.004, 0.03):
+        a, b = lugre.sliding_linearisation(p, v0), lugre.sliding_linearisation(BIANCHI2014, v0)
+        for m in "ABCD":
+            assert_allclose(getattr(a, m), getattr(b, m), rtol=1e-12)
+    c1 = lugre.lugre_cycle(p, [0.3e-6, 3e-6, 60e-6], W20)
+    c0 = lugre.lugre_cycle(BIANCHI2014, [0.3e-6, 3e-6, 60e-6], W20)
+    assert_allclose(c1.energy, c0.energy, rtol=1e-12)
+    assert_allclose(c1.keq, c0.keq, rtol=1e-12)
+
+
+def test_presliding_linearisation_keeps_the_full_sigma1():
+    # sigma1(0) = sigma1 with zero slope: the contact at rest does not change
+    a = lugre.presliding_linearisation(BIANCHI_VD)
+    b = lugre.presliding_linearisation(BIANCHI2014)
+    assert_allclose(a.D, b.D, rtol=0) and assert_allclose(a.C, b.C, rtol=0)
+    j = lugre.lugre_jacobian(BIANCHI_VD, 0.0, 0.0)
+    assert float(j.dforce_dv) == BIANCHI2014.sigma1 + BIANCHI2014.sigma2
+
+
+@pytest.mark.parametrize("v_d", [1e-3, 3e-3, 1e-2])
+def test_sliding_damping_at_30_mm_s_is_no_longer_negative(v_d):
+    # the feed-through of the sliding linearisation, sigma1(v0) v0 g'(v0)/g(v0) + sigma2, is the
+    # contact's damping at frequencies well above its bristle rate; with g' by central
+    # differences of the Stribeck curve written out here
+    v0, h = 0.03, 1e-7
+    p = BIANCHI2014
+    b = v0 * (g_ref(p, v0 + h) - g_ref(p, v0 - h)) / (2 * h) / g_ref(p, v0)
+    constant = float(lugre.sliding_linearisation(p, v0).D[0, 0])
+    assert_allclose(constant, p.sigma1 * b + p.sigma2, rtol=1e-6)
+    assert constant < -3.5e6                 # about -3.8e6 N s/m: negative damping
+    q = dataclasses.replace(p, sigma1_decay_speed=v_d)
+    faded = float(lugre.sliding_linearisation(q, v0).D[0, 0])
+    assert_allclose(faded, s1_ref(q, v0) * b + p.sigma2, rtol=1e-6)
+    assert faded >= 0.0
+    # the DC gain (slope of F_ss) does not depend on the micro-damping
+    assert_allclose(float(lugre.sliding_linearisation(q, v0).dcgain()),
+                    float(lugre.sliding_linearisation(p, v0).dcgain()), rtol=1e-12)
+
+
+@pytest.mark.parametrize("v0", [-0.006, 0.004, 0.03])
+def test_sliding_linearisation_with_micro_damping_against_the_nonlinear_model(v0):
+    # small-signal response to a velocity step of 0.1 % against the simulated element
+    p = BIANCHI_VD
+    sys = lugre.sliding_linearisation(p, v0)
+    dv = 1e-3 * abs(v0)
+    tau = g_ref(p, v0) / (p.sigma0 * abs(v0))
+    t = np.linspace(0.0, 6 * tau, 301)
+    z_ss = g_ref(p, v0) * np.sign(v0) / p.sigma0
+    r = lugre.simulate_lugre(p, t, velocity=lambda tt: np.full_like(tt, v0 + dv), z0=z_ss)
+    lin = control.step_response(sys, t).outputs * dv
+    df = r.force - float(lugre.steady_state_friction(p, v0))
+    assert_allclose(df[1:], lin[1:], rtol=5e-3, atol=5e-3 * np.max(np.abs(lin)))
+
+
+def periodic_reference_vd(p, amplitude, omega):
+    """Energy per cycle by Radau, as periodic_reference but with sigma1(v) written out."""
+    period = 2 * math.pi / omega
+    knots = [-period / 4, period / 4, 3 * period / 4]
+
+    def v(t):
+        return amplitude * omega * math.cos(omega * t)
+
+    def rate(t):
+        vv = v(t)
+        return p.sigma0 * abs(vv) / g_ref(p, vv)
+
+    zs = p.fs / p.sigma0
+    y = [0.0, 0.0]
+    for a, b in itertools.pairwise(knots):
+        y = solve_ivp(lambda t, y: [v(t) - rate(t) * y[0], rate(t)], (a, b), y,
+                      method="Radau", jac=lambda t, y: [[-rate(t), 0.0], [0.0, 0.0]],
+                      rtol=1e-10, atol=[1e-12 * zs, 1e-12]).y[:, -1]
+    z0 = y[0] / -math.expm1(-y[1])
+
+    def rhs(t, y):
+        zd = v(t) - rate(t) * y[0]
+        f = p.sigma0 * y[0] + float(s1_ref(p, v(t))) * zd + p.sigma2 * v(t)
+        return [zd, f * v(t)]
+
+    def jac(t, y):
+        df = p.sigma0 - float(s1_ref(p, v(t))) * rate(t)
+        return [[-rate(t), 0], [df * v(t), 0]]
+
+    y = [z0, 0.0]
+    for a, b in itertools.pairwise(knots):
+        y = solve_ivp(rhs, (a, b), y, method="Radau", jac=jac, rtol=1e-10,
+                      atol=[1e-12 * zs, 1e-12 * p.fs * amplitude]).y[:, -1]
+    return y[1]
+
+
+@pytest.mark.parametrize("amplitude, f_hz", [(2e-6, 20.0), (50e-6, 20.0), (20e-6, 200.0)])
+def test_periodic_cycle_with_micro_damping_matches_radau_shooting(amplitude, f_hz):
+    p = dataclasses.replace(BIANCHI2014, sigma1_decay_speed=1e-3)
+    omega = 2 * math.pi * f_hz
+    energy = periodic_reference_vd(p, amplitude, omega)
+    assert_allclose(lugre.lugre_cycle(p, amplitude, omega).energy, energy, rtol=1e-6)
+    # and it differs from the constant-sigma1 cycle where the pads slide faster than v_d
+    if amplitude * omega > 1e-3:
+        assert abs(lugre.lugre_cycle(BIANCHI2014, amplitude, omega).energy / energy - 1) > 1e-3
+
+
+def test_decay_below_the_dissipativity_bound_makes_every_instant_dissipative():
+    # with the bristle energy sigma0 z^2/2 as storage, F v - sigma0 z dz/dt =
+    # sigma0 a z^2 - sigma1(v) a z v + (sigma1(v) + sigma2) v^2 (a = sigma0 |v|/g) is >= 0 for
+    # all z when sigma1(v)^2 |v| <= 4 g (sigma1(v) + sigma2); sufficient: sigma1(v) |v| <= 4 Fc,
+    # i.e. v_d <= 4 sqrt(2 e) Fc / sigma1 (the maximum of |v| exp(-(v/v_d)^2) is
+    # v_d / sqrt(2 e))
+    p0 = dataclasses.replace(BIANCHI2014, sigma2=0.0)
+    bound = 4 * math.sqrt(2 * math.e) * p0.fc / p0.sigma1
+    assert_allclose(bound, 1.281e-3, rtol=1e-3)
+    v = np.geomspace(1e-6, 1.0, 400)[:, None] * np.array([1.0, -1.0])
+    v = v.ravel()[:, None]
+    z = np.linspace(-1.2, 1.2, 241)[None, :] * p0.fs / p0.sigma0
+
+    def supply(p):
+        return lugre.lugre_force(p, z, v) * v - p.sigma0 * z * lugre.lugre_derivative(p, z, v)
+
+    scale = p0.fc * np.abs(v)
+    assert np.min(supply(dataclasses.replace(p0, sigma1_decay_speed=bound)) / scale) >= -1e-9
+    # the constant sigma1 of the paper is not dissipative at every instant
+    assert np.min(supply(p0) / scale) < -1.0

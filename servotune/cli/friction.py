@@ -8,6 +8,7 @@ DATA.csv`` identifies LuGre parameters from measurements.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from .. import plots, report
@@ -35,6 +36,9 @@ def add_parser(subparsers) -> None:
                    help="displacement amplitude A [m] (default 2e-6)")
     p.add_argument("--frequency-hz", type=float, default=20.0,
                    help="vibration frequency [Hz] (default 20)")
+    p.add_argument("--sigma1-decay-speed", type=float, default=None, metavar="V_D",
+                   help="velocity-dependent micro-damping sigma1 exp(-(v/V_D)^2), V_D [m/s] "
+                        "(default: the constant sigma1 of the set)")
     p.add_argument("--no-plots", action="store_true", help="do not write figures")
     add_output_options(p)
     p.set_defaults(func=run)
@@ -59,6 +63,8 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     params = lugre.LuGreParameters.named(args.params)
+    if args.sigma1_decay_speed is not None:
+        params = dataclasses.replace(params, sigma1_decay_speed=args.sigma1_decay_speed)
     if not math.isfinite(args.frequency_hz) or args.frequency_hz <= 0.0:
         raise ValueError(f"--frequency-hz must be a positive number, got {args.frequency_hz}")
     if not math.isfinite(args.amplitude) or args.amplitude <= 0.0:
@@ -105,7 +111,9 @@ def run(args) -> int:
         return 0
     print(f"LuGre friction ({args.params}): Fc = {params.fc:g} N, Fs = {params.fs:g} N, "
           f"vs = {params.vs:g} m/s, delta = {params.delta:g}, sigma0 = {params.sigma0:g} N/m, "
-          f"sigma1 = {params.sigma1:g} N s/m, sigma2 = {params.sigma2:g} N s/m")
+          f"sigma1 = {params.sigma1:g} N s/m, sigma2 = {params.sigma2:g} N s/m"
+          + ("" if params.sigma1_decay_speed is None else
+             f", sigma1 decay speed = {params.sigma1_decay_speed:g} m/s"))
     print(f"  Fs/sigma0 = {params.presliding_displacement:.4g} m; stiction Ceq max "
           f"{float(c_peak):.4g} N s/m at A = {float(a_peak):.4g} m")
     print(f"  at A = {args.amplitude:g} m, {args.frequency_hz:g} Hz:")

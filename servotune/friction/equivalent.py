@@ -193,7 +193,9 @@ def describing_function(params: LuGreParameters, amplitude, omega,
     bristle damping gives Ceq -> sigma1 + sigma2 and Keq -> sigma0 as A -> 0 (the presliding
     linearisation), and its exponential presliding curve dissipates before Fs is reached. At
     large amplitude both tend to the Coulomb-like 4 g / (pi w A) (with g the friction level)
-    plus sigma2.
+    plus sigma2. A velocity-dependent micro-damping (``params.sigma1_decay_speed``) enters
+    through the force of the cycle: the small-amplitude limit keeps sigma1 + sigma2, while
+    strokes faster than v_d lose the bristle damping.
 
     Examples
     --------

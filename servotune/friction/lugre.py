@@ -12,6 +12,18 @@ velocity z settles at ``z_ss = sgn(v) g(v) / sigma0`` and F at the steady-state 
 ``F_ss(v) = g(v) sgn(v) + sigma2 v`` (the paper's Fig 7). For small motions the bristles act as
 a spring sigma0 with a damper sigma1 + sigma2 (presliding, the paper's Fig 2 and Fig 6).
 
+Velocity-dependent micro-damping
+--------------------------------
+Optionally (``LuGreParameters.sigma1_decay_speed = v_d``) the bristle damping fades out with
+the sliding speed (Canudas de Wit et al. 1995; Olsson et al. 1998)::
+
+    F = sigma0 z + sigma1(v) dz/dt + sigma2 v,      sigma1(v) = sigma1 exp(-(v / v_d)^2)
+
+It keeps the presliding damper sigma1 for |v| << v_d and removes, while sliding, the term
+sigma1 d(dz/dt)/dv = sigma1 |v| g'(v) / g(v), which is a negative damping in the Stribeck
+region and can drive a lightly damped local mode into stick-slip oscillation. v_d = None (the
+default) is the paper's constant sigma1. The steady state (dz/dt = 0) does not depend on it.
+
 Simulation under an imposed motion
 ----------------------------------
 :func:`simulate_lugre` and :func:`lugre_cycle` integrate the bristle equation for an imposed
@@ -34,6 +46,9 @@ G. Bianchi, S. Cagna, N. Cau, F. Paolucci, "Analysis of vibration damping in mac
 Procedia CIRP 21 (2014) 367-372, Eq 3 and the table after Fig 8.
 K. J. Astrom, C. Canudas de Wit, "Revisiting the LuGre friction model", IEEE Control Systems
 Magazine 28(6) (2008) 101-114.
+H. Olsson, K. J. Astrom, C. Canudas de Wit, M. Gafvert, P. Lischinsky, "Friction models and
+friction compensation", European Journal of Control 4 (1998) 176-195 (velocity-dependent
+micro-damping for passivity).
 """
 
 from __future__ import annotations
@@ -62,6 +77,7 @@ __all__ = [
     "lugre_derivative",
     "lugre_force",
     "lugre_jacobian",
+    "micro_damping",
     "presliding_linearisation",
     "simulate_lugre",
     "sliding_linearisation",
@@ -82,7 +98,7 @@ def _finite(name: str, value) -> float:
 
 @dataclass(frozen=True)
 class LuGreParameters:
-    """The seven LuGre parameters, in SI units.
+    """The seven LuGre parameters, in SI units, and an optional micro-damping decay speed.
 
     Parameters
     ----------
@@ -100,6 +116,11 @@ class LuGreParameters:
         Bristle (micro-)damping [N s/m], >= 0.
     sigma2 : float
         Viscous friction [N s/m], >= 0.
+    sigma1_decay_speed : float or None
+        Velocity v_d [m/s], > 0, of the velocity-dependent micro-damping
+        ``sigma1(v) = sigma1 exp(-(v / v_d)^2)`` (Olsson et al. 1998; see the module
+        docstring). None (default): constant sigma1, the form of the paper and of
+        Canudas de Wit et al. (1995).
 
     Raises
     ------
@@ -119,6 +140,12 @@ class LuGreParameters:
 
     >>> p.scaled(0.25).fs
     1503.25
+
+    With the micro-damping fading at v_d = vs, sliding at 3 vs keeps exp(-9) of sigma1:
+
+    >>> q = dataclasses.replace(p, sigma1_decay_speed=0.01)
+    >>> round(float(micro_damping(q, 0.03)) / q.sigma1, 6), float(micro_damping(q, 0.0))
+    (0.000123, 16000000.0)
     """
 
     fc: float
@@ -128,10 +155,18 @@ class LuGreParameters:
     sigma0: float
     sigma1: float
     sigma2: float
+    sigma1_decay_speed: float | None = None
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
-            object.__setattr__(self, field.name, _finite(field.name, getattr(self, field.name)))
+            value = getattr(self, field.name)
+            if field.name == "sigma1_decay_speed":
+                if value is None:
+                    continue
+                if isinstance(value, bool):
+                    raise ValueError(f"sigma1_decay_speed must be a speed [m/s] or None, got "
+                                     f"{value!r}")
+            object.__setattr__(self, field.name, _finite(field.name, value))
         if self.fc <= 0.0:
             raise ValueError(f"fc (Coulomb friction) must be > 0 N, got {self.fc!r}")
         if self.fs < self.fc:
@@ -151,6 +186,10 @@ class LuGreParameters:
                 "paper's table prints -1.6e7, use +1.6e7")
         if self.sigma2 < 0.0:
             raise ValueError(f"sigma2 (viscous friction) must be >= 0 N s/m, got {self.sigma2!r}")
+        if self.sigma1_decay_speed is not None and self.sigma1_decay_speed <= 0.0:
+            raise ValueError(
+                f"sigma1_decay_speed (micro-damping decay speed v_d) must be > 0 m/s, got "
+                f"{self.sigma1_decay_speed!r}; leave it out (None) for a constant sigma1")
 
     @classmethod
     def named(cls, name: str) -> LuGreParameters:
@@ -168,7 +207,8 @@ class LuGreParameters:
     def scaled(self, factor: float) -> LuGreParameters:
         """The same contact with every force and coefficient multiplied by ``factor``.
 
-        Fc, Fs, sigma0, sigma1 and sigma2 scale; vs and delta do not. Use it to share an
+        Fc, Fs, sigma0, sigma1 and sigma2 scale; vs, delta and sigma1_decay_speed do not. Use it
+        to share an
         axis-total friction (as identified in the paper, where all friction is lumped at the
         guide-way pads) among n pads with ``factor = 1/n``: n scaled elements in parallel moving
         together give back the total force for every motion.
@@ -186,7 +226,8 @@ class LuGreParameters:
         return self.fs / self.sigma0
 
     def to_dict(self) -> dict:
-        """The parameters as a plain dictionary (SI)."""
+        """The parameters as a plain dictionary (SI; ``sigma1_decay_speed`` None when sigma1 is
+        constant)."""
         return dataclasses.asdict(self)
 
 
@@ -279,11 +320,41 @@ def lugre_derivative(params: LuGreParameters, z, v) -> np.ndarray:
     return v - params.sigma0 * np.abs(v) * z / stribeck_curve(params, v)
 
 
+def micro_damping(params: LuGreParameters, v) -> np.ndarray:
+    """The bristle damping sigma1(v) [N s/m]: sigma1, or ``sigma1 exp(-(v/v_d)^2)`` with
+    ``v_d = params.sigma1_decay_speed``.
+
+    Examples
+    --------
+    At v = v_d the damping has fallen to 1/e of its presliding value:
+
+    >>> p = dataclasses.replace(BIANCHI2014, sigma1_decay_speed=0.01)
+    >>> bool(abs(float(micro_damping(p, -0.01)) - p.sigma1 / math.e) < 1e-6)
+    True
+    """
+    v = _array("v", v)
+    if params.sigma1_decay_speed is None:
+        return np.full_like(v, params.sigma1)
+    return params.sigma1 * np.exp(-((v / params.sigma1_decay_speed) ** 2))
+
+
+def _micro_damping_slope(params: LuGreParameters, v: np.ndarray) -> np.ndarray:
+    """d sigma1(v) / dv = -2 v / v_d^2 sigma1(v) [N s^2/m^2] (0 for a constant sigma1)."""
+    if params.sigma1_decay_speed is None:
+        return np.zeros_like(v)
+    return -2.0 * v / params.sigma1_decay_speed**2 * micro_damping(params, v)
+
+
 def lugre_force(params: LuGreParameters, z, v) -> np.ndarray:
-    """F = sigma0 z + sigma1 dz/dt + sigma2 v [N], the friction force on the contact."""
+    """F = sigma0 z + sigma1(v) dz/dt + sigma2 v [N], the friction force on the contact.
+
+    sigma1(v) is :func:`micro_damping` (the constant sigma1 unless ``sigma1_decay_speed`` is
+    set).
+    """
     z = _array("z", z)
     v = _array("v", v)
-    return params.sigma0 * z + params.sigma1 * lugre_derivative(params, z, v) + params.sigma2 * v
+    return (params.sigma0 * z + micro_damping(params, v) * lugre_derivative(params, z, v)
+            + params.sigma2 * v)
 
 
 class LuGreJacobian(NamedTuple):
@@ -313,7 +384,9 @@ def lugre_jacobian(params: LuGreParameters, z, v) -> LuGreJacobian:
 
         df/dz = -a
         df/dv = 1 - sigma0 z (sgn(v) / g - |v| g' / g^2)
-        dF/dz = sigma0 + sigma1 df/dz,      dF/dv = sigma1 df/dv + sigma2
+        dF/dz = sigma0 + sigma1(v) df/dz,   dF/dv = sigma1(v) df/dv + sigma1'(v) f + sigma2
+
+    (sigma1' = 0 for a constant sigma1).
 
     At v = 0, where |v| has a kink, sgn(0) = 0 is used: df/dv = 1, the mean of the one-sided
     derivatives.
@@ -337,10 +410,13 @@ def lugre_jacobian(params: LuGreParameters, z, v) -> LuGreJacobian:
     dzdot_dz = -params.sigma0 * np.abs(v) / g
     dzdot_dv = 1.0 - params.sigma0 * z * (np.sign(v) / g - np.abs(v) * dg / g**2)
     dzdot_dz, dzdot_dv = np.broadcast_arrays(dzdot_dz, dzdot_dv)
-    return LuGreJacobian(
-        dzdot_dz=dzdot_dz, dzdot_dv=dzdot_dv,
-        dforce_dz=params.sigma0 + params.sigma1 * dzdot_dz,
-        dforce_dv=params.sigma1 * dzdot_dv + params.sigma2)
+    s1 = micro_damping(params, v)
+    ds1 = _micro_damping_slope(params, v)
+    zdot = v - params.sigma0 * np.abs(v) * z / g
+    dforce_dz, dforce_dv = np.broadcast_arrays(
+        params.sigma0 + s1 * dzdot_dz, s1 * dzdot_dv + ds1 * zdot + params.sigma2)
+    return LuGreJacobian(dzdot_dz=dzdot_dz, dzdot_dv=dzdot_dv, dforce_dz=dforce_dz,
+                         dforce_dv=dforce_dv)
 
 
 def presliding_linearisation(params: LuGreParameters) -> control.StateSpace:
@@ -359,7 +435,9 @@ def presliding_linearisation(params: LuGreParameters) -> control.StateSpace:
     -----
     At v = 0, z = 0 the term sigma0 |v| z / g is of second order. Connected to a mass m
     (m dv/dt = f - F) it gives w_n = sqrt(sigma0 / m), zeta = (sigma1 + sigma2) /
-    (2 sqrt(sigma0 m)) (Canudas de Wit et al. 1995, sec III).
+    (2 sqrt(sigma0 m)) (Canudas de Wit et al. 1995, sec III). A velocity-dependent
+    micro-damping has its full value sigma1(0) = sigma1 here (and zero slope), so the
+    presliding contact does not depend on ``sigma1_decay_speed``.
 
     Examples
     --------
@@ -383,11 +461,15 @@ def sliding_linearisation(params: LuGreParameters, v0: float) -> control.StateSp
         Input ``"velocity"`` (velocity deviation from v0 [m/s]), output ``"force"`` (force
         deviation from F_ss(v0) [N]), state ``"z"`` (bristle deflection deviation [m])::
 
-            dz/dt = -a z + b v,     F = (sigma0 - sigma1 a) z + (sigma1 b + sigma2) v
-            a = sigma0 |v0| / g(v0),   b = v0 g'(v0) / g(v0)
+            dz/dt = -a z + b v,     F = (sigma0 - s1 a) z + (s1 b + sigma2) v
+            a = sigma0 |v0| / g(v0),   b = v0 g'(v0) / g(v0),   s1 = sigma1(v0)
 
         a first-order lag with time constant 1/a whose DC gain is
-        ``sigma0 b / a + sigma2 = dF_ss/dv`` at v0 (negative in the Stribeck region).
+        ``sigma0 b / a + sigma2 = dF_ss/dv`` at v0 (negative in the Stribeck region). Its
+        high-frequency damping, the feed-through ``s1 b + sigma2``, is negative in the
+        Stribeck region for a large constant sigma1 (b < 0 there); a micro-damping that fades
+        with speed (``sigma1_decay_speed``, s1 = sigma1(v0)) removes that. The slope of
+        sigma1(v) does not enter: it multiplies dz/dt, which is 0 in steady sliding.
 
     Raises
     ------
@@ -401,6 +483,15 @@ def sliding_linearisation(params: LuGreParameters, v0: float) -> control.StateSp
     >>> p = LuGreParameters.named("bianchi2014")
     >>> float(sliding_linearisation(p, 0.005).dcgain()) < 0.0
     True
+
+    At 30 mm/s the constant sigma1 gives a negative high-frequency damping; fading it out
+    above v_d = vs leaves about sigma2:
+
+    >>> round(float(sliding_linearisation(p, 0.03).D[0, 0]) / 1e6, 2)
+    -3.81
+    >>> q = dataclasses.replace(p, sigma1_decay_speed=0.01)
+    >>> round(float(sliding_linearisation(q, 0.03).D[0, 0]))
+    5107
     """
     v0 = _finite("v0", v0)
     if v0 == 0.0:
@@ -409,8 +500,8 @@ def sliding_linearisation(params: LuGreParameters, v0: float) -> control.StateSp
     g = float(stribeck_curve(params, v0))
     a = params.sigma0 * abs(v0) / g
     b = v0 * float(_stribeck_derivative(params, np.array(v0))) / g
-    return control.ss([[-a]], [[b]], [[params.sigma0 - params.sigma1 * a]],
-                      [[params.sigma1 * b + params.sigma2]],
+    s1 = float(micro_damping(params, v0))
+    return control.ss([[-a]], [[b]], [[params.sigma0 - s1 * a]], [[s1 * b + params.sigma2]],
                       inputs=["velocity"], outputs=["force"], states=["z"],
                       name="lugre_sliding")
 
@@ -544,7 +635,7 @@ def simulate_lugre(params: LuGreParameters, t, *, displacement=None, velocity=No
     if displacement is None:
         x = x - x[0]
     zdot = lugre_derivative(params, z, v)
-    force = params.sigma0 * z + params.sigma1 * zdot + params.sigma2 * v
+    force = params.sigma0 * z + micro_damping(params, v) * zdot + params.sigma2 * v
     return LuGreResponse(t=t, displacement=x, velocity=v, z=z, zdot=zdot, force=force)
 
 
@@ -683,7 +774,7 @@ def lugre_cycle(params: LuGreParameters, amplitude, omega,
         z_start = b[:, -1] / -np.expm1(-total)
     z = np.concatenate([z_start[:, None], p * z_start[:, None] + b], axis=-1)
     zdot = v_nodes - _rate(params, v_nodes) * z
-    force = params.sigma0 * z + params.sigma1 * zdot + params.sigma2 * v_nodes
+    force = params.sigma0 * z + micro_damping(params, v_nodes) * zdot + params.sigma2 * v_nodes
     x = a_col * np.sin(theta)
     energy = a_col[:, 0] * _simpson_periodic(force * np.cos(theta), dtheta)
     keq = _simpson_periodic(force * np.sin(theta), dtheta) / (math.pi * a_col[:, 0])

@@ -8,7 +8,9 @@ therefore comes in two parts:
   nonlinear remainder ``r_<pad>`` and a constant ``one``, and outputs the force on the pad DOF
   ``f_<pad>``, the friction force ``F_<pad>`` and the internal state ``z_<pad>``;
 * a **remainder** ``r(v, z)`` [m/s], a compiled (numba) scalar function with its two partial
-  derivatives, evaluated per pad by the integrator (absent for linear laws).
+  derivatives, evaluated per pad by the integrator (absent for linear laws). A law may have
+  more than one remainder per pad (:attr:`PadFriction.n_remainders`), each an input of the
+  linear block and a function of the same ``(v, z)``.
 
 LuGre (Bianchi et al. 2014, Eq 3; Canudas de Wit et al. 1995)::
 
@@ -24,12 +26,25 @@ sigma1 v by sigma1 w while sliding is carried exactly by the linear part and the
 small. The axis-total parameters are shared equally by the pads (``params.scaled(1/n)``); the
 rate a(v) does not change with the share.
 
+With a velocity-dependent micro-damping (``LuGreParameters.sigma1_decay_speed = v_d``, Olsson
+et al. 1998) the force carries a second nonlinearity, ``sigma1 m`` with ``m = e(v) (v - w)``
+and ``e(v) = exp(-(v/v_d)^2)``::
+
+    F = sigma0 z + sigma1 m + sigma2 v,     m = m0 + m_v v + m_z z - q
+
+so the law has a second remainder ``q_<pad>`` [m/s] (law :data:`LAW_IDS` ``"lugre_damping"``):
+``q = m0 + m_v v + m_z z - e(v) (v - a(v) z)``, linearised about the same operating point as
+w (about rest m ~ v, the presliding damper sigma1; about steady sliding at v0 the damper
+sigma1 e(v0) of :func:`servotune.friction.sliding_linearisation`).
+
 References
 ----------
 C. Canudas de Wit, H. Olsson, K. J. Astrom, P. Lischinsky, "A new model for control of systems
 with friction", IEEE Trans. Automatic Control 40(3) (1995) 419-425.
 G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
 Eq 3 and sec 5.3.
+H. Olsson, K. J. Astrom, C. Canudas de Wit, M. Gafvert, P. Lischinsky, "Friction models and
+friction compensation", European Journal of Control 4 (1998) 176-195.
 """
 
 from __future__ import annotations
@@ -41,26 +56,31 @@ import control
 import numba
 import numpy as np
 
-from ..friction.lugre import LuGreParameters, lugre_jacobian, stribeck_curve
+from ..friction.lugre import LuGreParameters, lugre_force, lugre_jacobian, stribeck_curve
 from ..structure.model import signal_name
 
 __all__ = ["PadFriction", "LuGreFriction", "ViscousFriction", "lugre_remainder",
-           "evaluate_remainder", "LAW_IDS"]
+           "lugre_damping_remainder", "evaluate_remainder", "LAW_IDS"]
 
 
 class PadFriction:
     """Interface of a guide-way friction law for :func:`servotune.simulate.simulate`.
 
-    Subclasses give :attr:`name`, :meth:`pad_block` and, when nonlinear, :meth:`remainder`
-    (a numba-compiled ``f(v, z, params) -> (r, dr_dv, dr_dz)``) registered in
-    :data:`LAW_IDS` / :func:`evaluate_remainder` under :attr:`law_id`, with
-    :meth:`remainder_parameters` and :meth:`tolerances`. Values are axis totals shared equally
-    by the pads.
+    Subclasses give :attr:`name`, :meth:`pad_block` and, when nonlinear, a numba-compiled
+    remainder registered in :data:`LAW_IDS` / :func:`evaluate_remainder` under
+    :attr:`law_id` (``(component, v, z, params) -> (r, dr_dv, dr_dz)``), with
+    :meth:`remainder_parameters`, and :attr:`n_remainders` remainder inputs per pad (named by
+    :meth:`remainder_signals`). Values are axis totals shared equally by the pads.
     """
 
     name = "friction"
     nonlinear = False
     law_id = -1
+    n_remainders = 0
+
+    def remainder_signals(self, pad: str) -> tuple[str, ...]:
+        """The names of the remainder inputs of one pad, one per component."""
+        return tuple(signal_name(pad, prefix) for prefix in ("r_", "q_")[:self.n_remainders])
 
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
         """The linear part for one pad (see the module docstring for its signals)."""
@@ -118,8 +138,8 @@ class ViscousFriction(PadFriction):
 def lugre_remainder(v, z, p):
     """LuGre remainder r = a(v) z - (c0 + c_v v + c_z z) and its partial derivatives.
 
-    ``p = (sigma0, fc, fs, vs, delta, c0, c_v, c_z)`` (sigma0, fc, fs of any share: only their
-    ratios enter). At v = 0 the derivative of |v| is taken as 0.
+    ``p = (sigma0, fc, fs, vs, delta, c0, c_v, c_z, ...)`` (sigma0, fc, fs of any share: only
+    their ratios enter). At v = 0 the derivative of |v| is taken as 0.
     """
     sigma0, fc, fs, vs, delta, c0, cv, cz = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]
     av = abs(v)
@@ -138,17 +158,44 @@ def lugre_remainder(v, z, p):
     return r, da * z - cv, a - cz
 
 
+@numba.njit(cache=True)
+def lugre_damping_remainder(component, v, z, p):
+    """Remainders of LuGre with micro-damping sigma1 e(v), e(v) = exp(-(v/v_d)^2).
+
+    ``p = (sigma0, fc, fs, vs, delta, c0, c_v, c_z, v_d, m0, m_v, m_z)``. Component 0 is
+    :func:`lugre_remainder`; component 1 is ``q = m0 + m_v v + m_z z - e(v) (v - a(v) z)``
+    with its partial derivatives.
+    """
+    r, dr_dv, dr_dz = lugre_remainder(v, z, p)
+    if component == 0:
+        return r, dr_dv, dr_dz
+    vd, m0, mv, mz = p[8], p[9], p[10], p[11]
+    # a z = r + c0 + c_v v + c_z z, and its derivatives likewise
+    az = r + p[5] + p[6] * v + p[7] * z
+    daz_dv = dr_dv + p[6]
+    a = dr_dz + p[7]
+    x = v / vd
+    e = math.exp(-x * x)
+    de = -2.0 * x / vd * e
+    zdot = v - az
+    q = m0 + mv * v + mz * z - e * zdot
+    return q, mv - de * zdot - e * (1.0 - daz_dv), mz + e * a
+
+
 #: Compiled remainders known to the integrator, by :attr:`PadFriction.law_id`. A new nonlinear
 #: law adds its numba function here and a branch in :func:`evaluate_remainder` (a direct call
 #: is several times faster than calling a function passed as an argument).
-LAW_IDS = {"lugre": 0}
+LAW_IDS = {"lugre": 0, "lugre_damping": 1}
 
 
 @numba.njit(cache=True)
-def evaluate_remainder(law, v, z, p):
-    """The remainder of law number ``law`` (see :data:`LAW_IDS`) and its partial derivatives."""
+def evaluate_remainder(law, component, v, z, p):
+    """Remainder ``component`` of law number ``law`` (see :data:`LAW_IDS`) and its partial
+    derivatives."""
     if law == 0:
         return lugre_remainder(v, z, p)
+    if law == 1:
+        return lugre_damping_remainder(component, v, z, p)
     return math.nan, math.nan, math.nan
 
 
@@ -159,7 +206,9 @@ class LuGreFriction(PadFriction):
     Parameters
     ----------
     params : LuGreParameters
-        Axis total, e.g. ``LuGreParameters.named("bianchi2014")``.
+        Axis total, e.g. ``LuGreParameters.named("bianchi2014")``. With
+        ``sigma1_decay_speed`` set the law has the second remainder of the micro-damping (see
+        the module docstring).
 
     Examples
     --------
@@ -181,50 +230,86 @@ class LuGreFriction(PadFriction):
             raise ValueError("LuGreFriction needs LuGreParameters, e.g. "
                              "LuGreParameters.named('bianchi2014')")
 
-    def linearisation(self, speed: float = 0.0) -> tuple[float, float, float]:
-        """(c0, c_v, c_z) of ``w ~ c0 + c_v v + c_z z`` about rest (0, 0, 0) or steady sliding
-        at ``speed`` [m/s] (tangent at v0, z_ss = sgn(v0) g(v0)/sigma0)."""
+    @property
+    def law_id(self) -> int:
+        """:data:`LAW_IDS` ``"lugre"`` (constant sigma1) or ``"lugre_damping"``."""
+        if self.params.sigma1_decay_speed is None:
+            return LAW_IDS["lugre"]
+        return LAW_IDS["lugre_damping"]
+
+    @property
+    def n_remainders(self) -> int:
+        """1 (r) with a constant sigma1, 2 (r and q) with the micro-damping."""
+        return 1 if self.params.sigma1_decay_speed is None else 2
+
+    def _operating_point(self, speed: float):
         speed = float(speed)
         if not math.isfinite(speed):
             raise ValueError(f"the operating speed must be finite, got {speed!r}")
         if speed == 0.0:
-            return 0.0, 0.0, 0.0
+            return speed, 0.0, None
         p = self.params
         z0 = math.copysign(float(stribeck_curve(p, speed)), speed) / p.sigma0
-        jac = lugre_jacobian(p, z0, speed)
+        return speed, z0, lugre_jacobian(p, z0, speed)
+
+    def linearisation(self, speed: float = 0.0) -> tuple[float, float, float]:
+        """(c0, c_v, c_z) of ``w ~ c0 + c_v v + c_z z`` about rest (0, 0, 0) or steady sliding
+        at ``speed`` [m/s] (tangent at v0, z_ss = sgn(v0) g(v0)/sigma0)."""
+        speed, z0, jac = self._operating_point(speed)
+        if jac is None:
+            return 0.0, 0.0, 0.0
         # dz/dt = v - w  =>  dw/dv = 1 - d(zdot)/dv, dw/dz = -d(zdot)/dz
         cv = 1.0 - float(jac.dzdot_dv)
         cz = -float(jac.dzdot_dz)
         w0 = speed  # steady sliding: dz/dt = 0
         return w0 - cv * speed - cz * z0, cv, cz
 
+    def damping_linearisation(self, speed: float = 0.0) -> tuple[float, float, float]:
+        """(m0, m_v, m_z) of ``e(v) dz/dt ~ m0 + m_v v + m_z z`` about rest (0, 1, 0) or steady
+        sliding at ``speed`` (there dz/dt = 0, so the slope of e does not enter)."""
+        speed, z0, jac = self._operating_point(speed)
+        if jac is None:
+            return 0.0, 1.0, 0.0
+        vd = self.params.sigma1_decay_speed
+        e0 = 1.0 if vd is None else math.exp(-((speed / vd) ** 2))
+        mv = e0 * float(jac.dzdot_dv)
+        mz = e0 * float(jac.dzdot_dz)
+        return -(mv * speed + mz * z0), mv, mz
+
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
-        v, r, f, force, z = _signals(pad)
+        v, _, f, force, z = _signals(pad)
+        remainders = list(self.remainder_signals(pad))
         p = self.params.scaled(1.0 / n_pads)
         c0, cv, cz = self.linearisation(speed)
-        # dz/dt = v - (c0 + cv v + cz z + r);  F = s0 z + s1 dz/dt + s2 v;  f = -F
         a = [[-cz]]
-        b = [[1.0 - cv, -1.0, -c0]]
-        c_force = [p.sigma0 - p.sigma1 * cz]
-        d_force = [p.sigma1 * (1.0 - cv) + p.sigma2, -p.sigma1, -p.sigma1 * c0]
+        if self.n_remainders == 1:
+            # dz/dt = v - (c0 + cv v + cz z + r);  F = s0 z + s1 dz/dt + s2 v;  f = -F
+            b = [[1.0 - cv, -1.0, -c0]]
+            c_force = [p.sigma0 - p.sigma1 * cz]
+            d_force = [p.sigma1 * (1.0 - cv) + p.sigma2, -p.sigma1, -p.sigma1 * c0]
+        else:
+            # F = s0 z + s1 (m0 + mv v + mz z - q) + s2 v
+            m0, mv, mz = self.damping_linearisation(speed)
+            b = [[1.0 - cv, -1.0, 0.0, -c0]]
+            c_force = [p.sigma0 + p.sigma1 * mz]
+            d_force = [p.sigma1 * mv + p.sigma2, 0.0, -p.sigma1, p.sigma1 * m0]
+        zeros = [0.0] * len(d_force)
         return control.ss(a, b, [[-c_force[0]], c_force, [1.0]],
-                          [[-d for d in d_force], d_force, [0.0, 0.0, 0.0]],
-                          inputs=[v, r, "one"], outputs=[f, force, z], states=[z],
+                          [[-d for d in d_force], d_force, zeros],
+                          inputs=[v, *remainders, "one"], outputs=[f, force, z], states=[z],
                           name=f"friction_{signal_name(pad)}")
 
-    law_id = LAW_IDS["lugre"]
-
     def remainder(self):
-        return lugre_remainder
+        return lugre_remainder if self.n_remainders == 1 else lugre_damping_remainder
 
     def remainder_parameters(self, speed: float = 0.0) -> np.ndarray:
         p = self.params
-        return np.array([p.sigma0, p.fc, p.fs, p.vs, p.delta, *self.linearisation(speed)])
+        head = [p.sigma0, p.fc, p.fs, p.vs, p.delta, *self.linearisation(speed)]
+        if self.n_remainders == 1:
+            return np.array(head)
+        return np.array([*head, p.sigma1_decay_speed, *self.damping_linearisation(speed)])
 
     def friction_force(self, v, z):
-        """F [N], axis total, for velocity v [m/s] and bristle deflection z [m]."""
-        p = self.params
-        v = np.asarray(v, dtype=float)
-        z = np.asarray(z, dtype=float)
-        zdot = v - p.sigma0 * np.abs(v) * z / stribeck_curve(p, v)
-        return p.sigma0 * z + p.sigma1 * zdot + p.sigma2 * v
+        """F [N], axis total, for velocity v [m/s] and bristle deflection z [m]
+        (:func:`servotune.friction.lugre_force`)."""
+        return lugre_force(self.params, z, v)

@@ -1,7 +1,8 @@
 """Exponential collocation integrator for a linear system with a few stiff nonlinear inputs.
 
 The axis is ``dX/dt = A X + B_u u(t) + B_r r``, with one nonlinear input per pad,
-``r_p = r(v_p, z_p)`` (:mod:`servotune.simulate.system`). A holds the structure (with its high
+``r_p = r(v_p, z_p)`` (:mod:`servotune.simulate.system`), or a few (remainder k is component
+``k // n_pads`` of the law at pad ``k % n_pads``). A holds the structure (with its high
 modes), the drive and the linearised contacts, including the bristle damper sigma1 that acts in
 microseconds on the pads; r holds what is left of the LuGre law, stiff while the pads slide
 (time constant g/(sigma0 |v|) ~ 1e-5 s). Both stiffnesses are handled without small steps:
@@ -18,10 +19,11 @@ microseconds on the pads; r holds what is left of the LuGre law, stiff while the
                   + sum_j alpha_ij(lambda) B_r R_j,    alpha_ij = int_0^{c_i h} e^{lambda
                   (c_i h - s)} l_j(s) ds
 
-  The 2 n_pads unknowns R_j = r(y(c_j h)) are found by Newton's method on a system of that size
-  (the pads couple only through their outputs v_p, z_p), so a step costs O(n n_pads), not
-  O(n^2) or O(n^3). For the nonlinear part the scheme is the 2-stage Radau IIA collocation:
-  L-stable (the sliding bristles relax in one step without ringing) and stiffly accurate.
+  The 2 n_r unknowns R_j = r(y(c_j h)) (n_r = n_pads remainders, or 2 n_pads) are found by
+  Newton's method on a system of that size (the pads couple only through their outputs v_p,
+  z_p), so a step costs O(n n_r), not O(n^2) or O(n^3). For the nonlinear part the scheme is
+  the 2-stage Radau IIA collocation: L-stable (the sliding bristles relax in one step without
+  ringing) and stiffly accurate.
 * A step whose Newton iteration does not converge (e.g. at a violent break-away) is redone as
   two half steps, recursively down to 1/64 of the step; below that the integration stops with
   :class:`SimulationError`.
@@ -422,7 +424,8 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
                 for st in range(2):
                     for p in range(nr):
                         row = st * nr + p
-                        val, a_v, a_z = evaluate_remainder(law, y[st, p], y[st, nr + p], rparams)
+                        val, a_v, a_z = evaluate_remainder(law, p // n_pads, y[st, p],
+                                                           y[st, nr + p], rparams)
                         res[row] = val - rr[row]
                         dv[row] = a_v
                         dz[row] = a_z

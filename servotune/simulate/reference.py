@@ -6,7 +6,10 @@ the original states X and without any splitting::
     dX/dt = A0 X + B_u u(t) + B_w w(X),      w_p = a(v_p) z_p = sigma0 |v_p| z_p / g(v_p)
 
 where A0 is the linear part about rest (presliding contacts) and w the full LuGre relaxation
-rate per pad, with the analytic Jacobian ``A0 + B_w dw/dX``. The energy powers are appended as
+rate per pad, with the analytic Jacobian ``A0 + B_w dw/dX``. With a velocity-dependent
+micro-damping w carries, per pad, also ``q_p = v_p - e(v_p) dz_p/dt`` (the damper sigma1 of
+the presliding contact minus sigma1(v) dz/dt, over sigma1), written here from
+:mod:`servotune.friction.lugre` (not from the compiled law). The energy powers are appended as
 extra states, so that a stiff solver at tight tolerance gives the reference energies. It is the
 baseline of ``benchmarks/simulate_sweep.py`` and the independent check of the tests.
 """
@@ -17,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..friction.lugre import stribeck_curve
+from ..friction.lugre import lugre_derivative, lugre_jacobian, stribeck_curve
 from .scenario import Scenario
 from .simulator import NonlinearAxis
 from .system import axis_system
@@ -80,7 +83,19 @@ def ode_model(axis: NonlinearAxis, scenario: Scenario) -> OdeModel:
                           * e * np.sign(v), 0.0)
         dw_dv = p.sigma0 * z * (np.sign(v) / g - av * dg / g**2)
         dw_dz = p.sigma0 * av / g
-        return w, dw_dv, dw_dz
+        if friction.n_remainders == 1:
+            return w, dw_dv, dw_dz
+        # micro-damping e(v) = exp(-(v/v_d)^2): q = v - e(v) dz/dt
+        vd = p.sigma1_decay_speed
+        ev = np.exp(-((v / vd) ** 2))
+        dev = -2.0 * v / vd**2 * ev
+        zdot = lugre_derivative(p, z, v)
+        j = lugre_jacobian(p, z, v)
+        q = v - ev * zdot
+        dq_dv = 1.0 - dev * zdot - ev * j.dzdot_dv
+        dq_dz = -ev * j.dzdot_dz
+        return (np.concatenate([w, q]), np.concatenate([dw_dv, dq_dv]),
+                np.concatenate([dw_dz, dq_dz]))
 
     def outputs_of(x, u, w):
         return c @ x + d @ np.concatenate([u, w])
@@ -108,7 +123,9 @@ def ode_model(axis: NonlinearAxis, scenario: Scenario) -> OdeModel:
         j[:n, :n] = a0
         if nonlinear:
             _, dv, dz = w_of(x)
-            j[:n, :n] += bw @ (dv[:, None] * pv + dz[:, None] * pz)
+            k = friction.n_remainders
+            j[:n, :n] += bw @ (dv[:, None] * np.tile(pv, (k, 1))
+                               + dz[:, None] * np.tile(pz, (k, 1)))
         # the work states do not feed back; their rows are left out of the Newton matrix
         return j
 

@@ -9,8 +9,9 @@ Why this integrator: the axis is stiff in two unrelated ways. Its linear part ha
 the rigid-body travel to the bristle damper sigma1 on the pad masses (time constants ~1e-5 s)
 and the structure's high modes; its nonlinear part, the sliding bristles, relaxes in ~1e-5 s
 too. An exponential integrator makes the first exact for any step; Radau collocation makes the
-second L-stable; and because the nonlinearity enters through one input per pad, the implicit
-equations are of size 2 n_pads whatever the size of the model. Compiled with numba, a step of
+second L-stable; and because the nonlinearity enters through one input per pad (two with a
+velocity-dependent micro-damping), the implicit equations are of size 2 n_pads (4 n_pads)
+whatever the size of the model. Compiled with numba, a step of
 the paper's 41-DOF axis takes microseconds, and the step is chosen for the excitation (tens of
 steps per cycle at 100 Hz), not for the stiffness; an error estimate (the curvature of the
 friction remainder over the step, propagated to the pad motion) halves it where the friction
@@ -31,7 +32,7 @@ import numpy as np
 from ..drive import Drive
 from ..structure.model import ModalModel, signal_name
 from . import integrator
-from .contact import PadFriction, lugre_remainder
+from .contact import PadFriction, evaluate_remainder, lugre_remainder
 from .result import SimulationError, SimulationResult
 from .scenario import Scenario
 from .system import AxisSystem, axis_system
@@ -176,11 +177,14 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     xr = np.zeros(m)
     xm = np.zeros(m)
     rparams = data["rparams"]
-    r0 = data["remainder"](0.0, 0.0, rparams)[0] if nr else 0.0
-    r_last = np.full(2 * nr, r0)
+    n_pads_power = len(sysm.pads)
+    # the remainders at rest (v = z = 0); remainder input k is component k // n_pads
+    r_last = np.zeros(2 * nr)
+    for k in range(nr):
+        r_last[k] = r_last[nr + k] = evaluate_remainder(data["law"], k // n_pads_power, 0.0,
+                                                        0.0, rparams)[0]
     energy = np.zeros(integrator.N_POWERS)
     power = np.zeros(integrator.N_POWERS)
-    n_pads_power = len(sysm.pads)
     integrator._powers(xr, xm, samples[0], r_last[nr:], data["cp_re"], data["cp_im"],
                        data["dpu"], data["dpr"], data["n_force"], data["force_idx"],
                        n_pads_power, np.empty(data["cp_re"].shape[0]), power)
@@ -282,8 +286,10 @@ def _prepare(sysm: AxisSystem, h: float, axis: NonlinearAxis, scenario: Scenario
     bu = np.ascontiguousarray(left @ b[:, :nu])
     br = np.ascontiguousarray(left @ b[:, nu:])
     nr = br.shape[1]
-    cy = np.ascontiguousarray(np.vstack([sysm.pad_velocity, sysm.pad_state]) @ vec) if nr else \
-        np.zeros((0, vec.shape[1]), dtype=complex)
+    # the pad outputs each remainder input depends on: remainder k belongs to pad k % n_pads
+    owner = np.arange(nr) % max(len(sysm.pads), 1)
+    cy = np.ascontiguousarray(np.vstack([sysm.pad_velocity[owner], sysm.pad_state[owner]])
+                              @ vec) if nr else np.zeros((0, vec.shape[1]), dtype=complex)
     weights = integrator.step_weights(form.lam, h, (cy, br) if nr else None)
     n_pads = len(sysm.pads)
     n_force = len(sysm.wp_force_inputs)

@@ -1,9 +1,10 @@
-"""The axis as a linear system with one nonlinear input per guide-way pad.
+"""The axis as a linear system with one (or a few) nonlinear inputs per guide-way pad.
 
 :func:`axis_system` interconnects (``control.interconnect``) the structure, the linear part of
 the friction law at each pad (:mod:`servotune.simulate.contact`) and the drive cascade exactly as
 :func:`servotune.plant.build_plant` does (same structure block, same drive blocks, same motor
-port), but leaves open, per pad, the nonlinear remainder ``r_<pad>`` of the friction law::
+port), but leaves open, per pad, the nonlinear remainder ``r_<pad>`` of the friction law (and
+``q_<pad>`` for a law with two remainders, LuGre with velocity-dependent micro-damping)::
 
     dX/dt = A X + B_u u(t) + B_r r,        r_p = r(v_p, z_p)   (per pad p)
 
@@ -42,7 +43,8 @@ class AxisSystem:
     ----------
     system : control.StateSpace
         Inputs: the known inputs present (subset of :data:`KNOWN_INPUTS`) then ``r_<pad>`` for
-        each pad with a nonlinear law. Outputs: :attr:`outputs`.
+        each pad with a nonlinear law (then ``q_<pad>`` for each pad, when the law has a second
+        remainder: remainder input k belongs to pad ``k % n_pads``). Outputs: :attr:`outputs`.
     inputs : tuple of str
         Known input names (columns of B_u).
     outputs : tuple of str
@@ -53,7 +55,8 @@ class AxisSystem:
     pad_velocity, pad_state : (n_pads, n) arrays
         Rows giving v_p and z_p from X (no feed-through).
     force_rows : (n_pads, n) arrays, force_du, force_dr
-        F_p = force_rows X + force_du u + force_dr r_p (friction force, per pad).
+        F_p = force_rows X + force_du u + force_dr r (friction force, per pad; force_dr has a
+        column per remainder input).
     wp_velocity : (n_forces, n) array
         Velocities of the DOFs the ``f_wp_*`` inputs act on, in input order.
     wp_force_inputs : tuple of int
@@ -151,7 +154,8 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
         unknown = [s for s in inputs if s not in available]
         if unknown:
             raise ValueError(f"inputs {unknown} are not inputs of this axis; it has {available}")
-    remainders = [signal_name(p, "r_") for p in pads] if nonlinear else []
+    remainders = ([friction.remainder_signals(p)[k] for k in range(friction.n_remainders)
+                   for p in pads] if nonlinear else [])
     outputs = [signal_name(d) for d in wp]
     if drive is not None:
         outputs += ["slide_x", "omega_motor", "following_error", "torque", "current"]
