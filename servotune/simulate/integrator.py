@@ -222,7 +222,7 @@ def step_weights(lam: np.ndarray, h: float, cy_br=None, levels: int = MAX_LEVEL)
 
 # reassociation lets the compiler vectorise the sums; NaN and infinity stay honoured (the
 # kernel checks for them)
-_FAST = {"reassoc", "contract", "arcp", "nsz"}
+_FAST = False  # bit-reproducible: results must not depend on how the kernel was compiled
 
 @numba.njit(cache=True, fastmath=_FAST)
 def _u_into(samples, s, out):
