@@ -52,9 +52,9 @@ from .structure.io import MatrixFileError, read_structure
 from .structure.model import ModalModel, UnknownDofError
 from .structure.reduction import craig_bampton
 
-__all__ = ["Axis", "AxisFormatError", "Cutting", "load_axis"]
+__all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis"]
 
-SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "requirements")
+SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "requirements", "tuning")
 _STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce"}
 _REDUCE_KEYS = {"boundary", "n_modes", "f_max_hz"}
 
@@ -81,6 +81,19 @@ class Cutting:
     direction: str = "x"
 
 
+@dataclass(frozen=True)
+class TuningSettings:
+    """``[tuning]``: which design variables are free, their bounds (SI) and the chatter weight.
+
+    ``bounds`` maps ``c`` [N s/m], ``kv`` [1/s], ``kp`` [N m s/rad] and ``ti`` [s] to
+    (low, high); absent ones take :data:`servotune.design.DEFAULT_BOUNDS`.
+    """
+
+    free: tuple[str, ...] = ("c", "kv", "kp", "ti")
+    bounds: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    chatter_weight: float = 0.0
+
+
 @dataclass(frozen=True, eq=False)
 class Axis:
     """A feed axis as described in ``axis.toml``.
@@ -97,6 +110,8 @@ class Axis:
     cutting : Cutting or None
     requirements : Requirements
         Defaults when the table is absent.
+    tuning : TuningSettings
+        ``[tuning]``; defaults when absent.
     tables : Mapping
         The raw TOML tables, read-only.
     """
@@ -109,6 +124,7 @@ class Axis:
     drive: Drive | None = None
     cutting: Cutting | None = None
     requirements: Requirements = field(default_factory=Requirements)
+    tuning: TuningSettings = field(default_factory=TuningSettings)
     tables: Mapping = field(default_factory=lambda: MappingProxyType({}))
 
     @property
@@ -375,6 +391,32 @@ def _cutting(data, file) -> Cutting | None:
     return Cutting(setup, (float(speeds[0]), float(speeds[1])), direction)
 
 
+def _tuning(data, file) -> TuningSettings:
+    names = ("c", "kv", "kp", "ti")
+    table = _table(data, "tuning", file, (), ("free", "chatter_weight", *names))
+    if table is None:
+        return TuningSettings()
+    free = table.get("free", list(names))
+    if (not isinstance(free, list) or not free or not all(v in names for v in free)
+            or len(set(free)) != len(free)):
+        raise _err(file, "[tuning] free", f"got {free!r}",
+                   f"give a list of distinct names among {list(names)}")
+    bounds = {}
+    for key in names:
+        if key in table:
+            b = table[key]
+            if (not isinstance(b, list) or len(b) != 2
+                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                               for v in b) or not 0 < b[0] < b[1] < math.inf):
+                raise _err(file, f"[tuning] {key}", f"got {b!r}",
+                           "give the bounds [low, high] in SI units with 0 < low < high")
+            bounds[key] = (float(b[0]), float(b[1]))
+    weight = table.get("chatter_weight", 0.0)
+    if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not 0 <= weight <= 1:
+        raise _err(file, "[tuning] chatter_weight", f"got {weight!r}", "give a number in [0, 1]")
+    return TuningSettings(tuple(free), MappingProxyType(bounds), float(weight))
+
+
 def _requirements(data, file) -> Requirements:
     keys = ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg", "gain_margin_min_db",
             "kv_min", "kv_min_m_per_min_per_mm", "band_hz", "loop_band_hz", "depth_required")
@@ -446,4 +488,5 @@ def load_axis(path) -> Axis:
                 path=folder.resolve(), structure=structure,
                 friction=_friction(data, structure, folder, file),
                 drive=_drive(data, structure, file), cutting=_cutting(data, file),
-                requirements=_requirements(data, file), tables=_frozen(data))
+                requirements=_requirements(data, file), tuning=_tuning(data, file),
+                tables=_frozen(data))

@@ -29,13 +29,17 @@ __all__ = [
     "two_mass_check",
     "mode_peaks_vs_damping",
     "tune_axis",
+    "fig5_check",
+    "nonlinear_check",
 ]
 
 HZ = 1.0 / (2.0 * math.pi)
 
-#: Default search bounds (SI); ``kp`` is relative to the initial value.
+#: Default search bounds (SI); ``kp`` is relative to the initial value. Ti stays at or below
+#: 0.2 s so that the velocity loop keeps its integral action (the compliance peak barely depends
+#: on Ti above that, which would leave Ti undetermined).
 DEFAULT_BOUNDS = {"c": (1e3, 1e8), "kv": (1.0, 300.0), "kp_factor": (0.01, 100.0),
-                  "ti": (1e-3, 1.0)}
+                  "ti": (1e-3, 0.2)}
 
 
 def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
@@ -53,7 +57,8 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     bounds : dict, optional
         ``{name: (low, high)}`` overriding :data:`DEFAULT_BOUNDS`.
     c0 : float, optional
-        Initial C [N s/m]; default the axis' viscous guide-way damping.
+        Initial C [N s/m]; default the axis' viscous guide-way damping, moved into the bounds
+        when outside them.
     """
     if not 0.0 <= chatter_weight <= 1.0:
         raise ValueError(f"chatter_weight must lie in [0, 1], got {chatter_weight!r}")
@@ -68,6 +73,8 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
         axis.require_cutting()
     b = dict(DEFAULT_BOUNDS, **(bounds or {}))
     problem_bounds = {"c": b["c"]}
+    if "c" in free:  # start inside the bounds (the axis' value is the "before" design only)
+        c0 = min(max(c0, b["c"][0]), b["c"][1])
     if drive is not None:
         kp0 = drive.velocity_loop.kp
         problem_bounds.update(
@@ -237,6 +244,7 @@ class AxisTuning:
     lobes_after: object = None
     two_mass: TwoMassCheck | None = None
     mode_peaks: ModePeaks | None = None
+    nonlinear: dict | None = None
     notes: tuple[str, ...] = field(default=())
 
     @property
@@ -275,32 +283,84 @@ class AxisTuning:
             "active_constraints": list(r.active),
             "solver": r.stats,
             "predicted": r.predicted,
-            "c_opt_analytic": None if self.two_mass is None else self.two_mass.c_opt_analytic,
+            "c_opt_analytic": (self.two_mass.c_opt_analytic
+                               if self.two_mass is not None and self.result.problem.drive is None
+                               else None),
             "two_mass_check": None if self.two_mass is None else self.two_mass.to_dict(),
             "mode_peaks": None if self.mode_peaks is None else self.mode_peaks.to_dict(),
+            "nonlinear_verification": self.nonlinear,
             "notes": list(self.notes),
         }
         return out
 
 
-def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
+def fig5_check(starts: int = 2) -> TwoMassCheck:
+    """Tune C alone on the paper's Fig 5 system (M1 = 5000 kg, K = 16e6 N/m, alpha = 0.3) and
+    compare with the closed-form fixed-point optimum: the optimiser's check on sec 4.1."""
+    from .requirements import Requirements
+    from .structure.model import ModalModel
+
+    system = twomass.TwoMassSystem(m1=5000.0, k=16e6, alpha=0.3)
+    k, m1, m2 = system.k, system.m1, system.m2
+    structure = ModalModel(np.diag([m1, m2]), [[k, -k], [-k, k]], ["pad1.x", "wp.x"],
+                           damping_ratio=0.0)
+    w_f1, w_f2 = twomass.fixed_points(system)
+    problem = TuningProblem(structure, ["pad1.x"], c=1e5, free=("c",),
+                            bounds={"c": (1e3, 1e8)},
+                            requirements=Requirements(band=(float(w_f1), 4.0 * float(w_f2))))
+    result = tune(problem, starts=starts, tolerance=1e-10)
+    return TwoMassCheck(system, twomass.optimal_damping(system), result.design.c,
+                        twomass.optimal_peak(system), result.after.peak_compliance)
+
+
+def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
+                    duration: float = 20.0, executor=None) -> dict:
+    """Sine sweeps of the axis with LuGre pads and the design (its C as the viscous part
+    sigma2 of the friction), standing still, compared with the linear predictions (locked,
+    presliding, viscous, describing function at the simulated pad amplitude); see
+    :func:`servotune.simulate.verify.verify_design`."""
+    from .simulate.setup import axis_setup
+    from .simulate.verify import design_setup, verify_design
+
+    setup = design_setup(axis_setup(axis), c=design.c, kv=design.kv, kp=design.kp,
+                         ti=design.ti)
+    return verify_design(setup, forces=forces, duration=duration, executor=executor)
+
+
+def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
               starts: int = 4, bounds: dict | None = None, seed: int = 0,
-              tolerance: float | None = None) -> AxisTuning:
+              tolerance: float | None = None, simulate: bool = False,
+              executor=None, sweep_duration: float = 20.0,
+              c0: float | None = None) -> AxisTuning:
     """Tune an axis and gather the before/after analyses.
+
+    Parameters
+    ----------
+    free, chatter_weight, bounds : optional
+        Override the axis' ``[tuning]`` settings (see :func:`tuning_problem`).
+    c0 : float, optional
+        Initial guide-way damping [N s/m]; default the axis' viscous value.
+    simulate : bool
+        Also run the nonlinear check (:func:`nonlinear_check`) of the tuned design.
+    executor : concurrent.futures.Executor, optional
+        Runs the nonlinear sweeps in parallel.
 
     Raises
     ------
     RequirementsNotMetError, UnstableLoopError, AxisFormatError
         As :func:`servotune.tuning.tune` and the axis loader.
     """
-    problem = tuning_problem(axis, free, chatter_weight, bounds)
+    settings = axis.tuning
+    free = settings.free if free is None else free
+    chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight
+    bounds = {**settings.bounds, **(bounds or {})}
+    problem = tuning_problem(axis, free, chatter_weight, bounds, c0)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
         tolerance = 1e-10 if two_mass else 1e-6
     result = tune(problem, starts=starts, seed=seed, tolerance=tolerance)
     out = {"axis": axis, "result": result}
-    if two_mass:
-        out["two_mass"] = two_mass_check(axis, result)
+    out["two_mass"] = two_mass_check(axis, result) if two_mass else fig5_check()
     if axis.drive is not None and result.after is not None:
         before_drive = problem.drive_for(result.initial)
         after_drive = problem.drive_for(result.design)
@@ -319,4 +379,7 @@ def tune_axis(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 
             lo, hi = problem.bounds["c"]
             out["mode_peaks"] = mode_peaks_vs_damping(
                 axis, np.geomspace(lo, hi, 41), after_drive, result.design.c)
+        if simulate:
+            out["nonlinear"] = nonlinear_check(axis, result.design, duration=sweep_duration,
+                                               executor=executor)
     return AxisTuning(**out)

@@ -66,7 +66,8 @@ def test_text_output_with_two_directions(capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["lobes", "axis_x"], "axis models are not available yet"),
+    (["lobes", "axis_x"], "no axis description here"),
+    (["lobes", "models/paper_x_axis", *MODE], "one source of the compliance"),
     (["lobes"], "give the compliance"),
     (["lobes", *MODE, "--immersion", "1.5"], "radial_immersion"),
     (["lobes", *MODE, "--kt=-6e8"], "kt"),
@@ -97,3 +98,22 @@ def test_existing_figure_is_not_overwritten(tmp_path, capsys):
     assert "--force" in capsys.readouterr().err and target.read_bytes() == b"keep me"
     assert main(["lobes", *MODE, "--out", str(tmp_path), "--force"]) == 0
     assert target.read_bytes() != b"keep me"
+
+
+def test_axis_lobes_agree_with_the_closed_loop_compliance(tmp_path, capsys):
+    # the AXIS form: lobes of the closed-loop work-piece compliance; b_crit is Tlusty's
+    # -1/(2 Kt mu min Re G) of that compliance (computed here directly from the plant)
+    import numpy as np
+
+    from servotune import analysis, chatter
+    from servotune.axis import load_axis
+
+    models = __import__("pathlib").Path(__file__).resolve().parents[1] / "models"
+    assert main(["lobes", str(models / "paper_x_axis"), "--out", str(tmp_path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    axis = load_axis(models / "paper_x_axis")
+    curve = analysis.compliance_curve(axis, analysis.axis_contact(axis, "viscous"),
+                                      omega=2 * np.pi * np.geomspace(1.0, 2000.0, 20000))
+    mu = chatter.directional_factor(axis.cutting.setup, "x")
+    expected = -1.0 / (2 * axis.cutting.setup.kt * (mu * curve.values.real).min())
+    assert out["b_crit_m"] == pytest.approx(expected, rel=2e-3)

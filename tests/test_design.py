@@ -37,7 +37,7 @@ def test_tune_refuses_to_overwrite(tmp_path, capsys):
 
 def test_tune_bundled_axis_improves_and_verifies(tmp_path, capsys):
     assert main(["tune", str(MODELS / "paper_x_axis"), "--out", str(tmp_path), "--json",
-                 "--starts", "2"]) == 0
+                 "--starts", "2", "--no-simulation"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["verified"] is True
     for key in ("c", "kv", "kp", "ti"):

@@ -14,7 +14,7 @@ import sys
 __all__ = ["main", "build_parser"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "tune",
+COMMANDS = ("init", "twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "tune",
             "table3", "verify")
 
 
@@ -45,6 +45,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, FileExistsError, FileNotFoundError, RuntimeError) as exc:
         print(f"servotune {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # output piped into e.g. head: stop quietly
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -5,7 +5,9 @@ from __future__ import annotations
 import warnings
 
 from .. import chatter, plots, report
-from ._common import add_output_options, print_json
+from ._common import add_contact_options, add_output_options, contact_from_args, print_json
+
+BENCHMARK = {"teeth": 2, "kt": 6e8, "kn": 2e8, "immersion": 1.0, "milling": "down"}
 
 HZ = 1.0 / (2.0 * 3.141592653589793)
 MM = 1e-3
@@ -16,12 +18,15 @@ def add_parser(subparsers) -> None:
         "lobes", help="chatter stability lobes, b_crit and the chatter margin (sec 2)",
         description="Stability lobes of milling from the tool/work-piece compliance: the "
                     "zero-order approximation (Altintas and Budak 1995) or the "
-                    "semi-discretisation (Insperger and Stepan 2004). Give the compliance as "
-                    "modes (--mode, --mode-y) or as a measured FRF (--frf). The default cutting "
-                    "set-up is the Insperger-Stepan benchmark: 2 teeth, Kt = 6e8, Kn = 2e8 "
-                    "N/m^2, full slot, down-milling.")
+                    "semi-discretisation (Insperger and Stepan 2004). Give the compliance as an "
+                    "axis (its closed-loop work-piece compliance with --contact and its "
+                    "[cutting] set-up), as modes (--mode, --mode-y) or as a measured FRF "
+                    "(--frf). Without an axis the default cutting set-up is the "
+                    "Insperger-Stepan benchmark: 2 teeth, Kt = 6e8, Kn = 2e8 N/m^2, full slot, "
+                    "down-milling; options given override the axis' [cutting].")
     p.add_argument("axis", nargs="?", metavar="AXIS",
-                   help="an axis model (not available yet: use --mode or --frf)")
+                   help="an axis folder (e.g. models/paper_x_axis)")
+    add_contact_options(p, default="viscous")
     p.add_argument("--mode", nargs=3, type=float, action="append", default=[],
                    metavar=("FN_HZ", "ZETA", "K_N_PER_M"),
                    help="a mode of the compliance in --direction: natural frequency [Hz], "
@@ -35,15 +40,15 @@ def add_parser(subparsers) -> None:
     p.add_argument("--frf", metavar="FILE.csv",
                    help="measured compliance: columns f_hz and re_ij_m_per_n, im_ij_m_per_n for "
                         "ij in xx, xy, yx, yy (at least xx or yy)")
-    p.add_argument("--teeth", type=int, default=2, help="number of teeth (2)")
-    p.add_argument("--kt", type=float, default=6e8,
+    p.add_argument("--teeth", type=int, default=None, help="number of teeth (2)")
+    p.add_argument("--kt", type=float, default=None,
                    help="tangential cutting coefficient Kt [N/m^2] (6e8)")
-    p.add_argument("--kn", type=float, default=2e8,
+    p.add_argument("--kn", type=float, default=None,
                    help="normal (radial) cutting coefficient Kn [N/m^2] (2e8); "
                         "Altintas' ratio Kr = Kn/Kt")
-    p.add_argument("--immersion", type=float, default=1.0,
+    p.add_argument("--immersion", type=float, default=None,
                    help="radial immersion a/D in (0, 1] (1 = full slot)")
-    p.add_argument("--milling", choices=("down", "up"), default="down",
+    p.add_argument("--milling", choices=("down", "up"), default=None,
                    help="down (climb) or up (conventional) milling (down)")
     p.add_argument("--speed-rpm", nargs=2, type=float, metavar=("MIN", "MAX"),
                    help="spindle-speed range [rpm] (default: the first ten lobes)")
@@ -65,25 +70,53 @@ def add_parser(subparsers) -> None:
 
 
 def _compliance(args):
-    if args.axis is not None:
-        raise ValueError(f"axis models are not available yet (asked for {args.axis!r}); give "
-                         "the compliance with --mode FN_HZ ZETA K_N_PER_M or --frf FILE.csv")
     modes = ([chatter.Mode.from_hz(*m, direction=args.direction) for m in args.mode]
              + [chatter.Mode.from_hz(*m, direction="y") for m in args.mode_y])
-    if args.frf and modes:
-        raise ValueError("give either modes (--mode/--mode-y) or --frf, not both")
+    given = [name for name, ok in (("AXIS", args.axis is not None), ("--mode", bool(modes)),
+                                   ("--frf", bool(args.frf))) if ok]
+    if len(given) > 1:
+        raise ValueError(f"give one source of the compliance, not {' and '.join(given)}")
+    if args.axis is not None:
+        from ..analysis import axis_plant
+        from ..axis import load_axis
+        from ..frequency import require_stable
+
+        axis = load_axis(args.axis)
+        contact = contact_from_args(axis, args)
+        plant = axis_plant(axis, contact, controlled=axis.drive is not None)
+        require_stable(plant)
+        d = axis.cutting.direction if axis.cutting is not None else args.direction
+        args.direction = d
+        sub = plant[plant.output_labels.index(f"wp_{d}"), plant.input_labels.index(f"f_wp_{d}")]
+        return sub, f"{axis.name}: closed-loop wp.{d} compliance with {contact.note}", axis
     if args.frf:
-        return chatter.read_frf_csv(args.frf), f"measured FRF {args.frf}"
+        return chatter.read_frf_csv(args.frf), f"measured FRF {args.frf}", None
     if not modes:
         raise ValueError("give the compliance: AXIS, --mode FN_HZ ZETA K_N_PER_M (repeatable) "
                          "or --frf FILE.csv")
-    return chatter.modal_compliance(modes), f"{len(modes)} mode(s)"
+    return chatter.modal_compliance(modes), f"{len(modes)} mode(s)", None
+
+
+def _setup(args, axis):
+    base = dict(BENCHMARK)
+    if axis is not None and axis.cutting is not None:
+        c = axis.cutting
+        base = {"teeth": c.setup.teeth, "kt": c.setup.kt, "kn": c.setup.kn,
+                "immersion": c.setup.radial_immersion, "milling": c.setup.milling}
+        if args.speed_rpm is None:
+            args.speed_rpm = list(c.speed_rpm)
+        if args.required_depth_mm is None and axis.requirements.depth_required:
+            args.required_depth_mm = axis.requirements.depth_required / MM
+    values = {k: (getattr(args, k) if getattr(args, k) is not None else v)
+              for k, v in base.items()}
+    return chatter.MillingSetup(teeth=values["teeth"], kt=values["kt"], kn=values["kn"],
+                                radial_immersion=values["immersion"],
+                                milling=values["milling"])
 
 
 def run(args) -> int:
-    system, source = _compliance(args)
-    setup = chatter.MillingSetup(teeth=args.teeth, kt=args.kt, kn=args.kn,
-                                 radial_immersion=args.immersion, milling=args.milling)
+    system, source, axis = _compliance(args)
+    setup = _setup(args, axis)
     required = None if args.required_depth_mm is None else args.required_depth_mm * MM
     figure = args.out / f"lobes_{args.method}.png"
     files = [] if args.no_plots else [figure]

@@ -34,12 +34,21 @@ def add_parser(subparsers) -> None:
                     "and figures. On a two-mass axis (models/two_mass_fig5) the tuned C is "
                     "checked against the closed-form fixed-point optimum Copt.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
-    p.add_argument("--free", type=_free, default=VARIABLES,
-                   help="design variables the optimiser may change (default c,kv,kp,ti)")
-    p.add_argument("--chatter-weight", type=float, default=0.0,
+    p.add_argument("--free", type=_free, default=None,
+                   help="design variables the optimiser may change (default: [tuning] free "
+                        "of the axis, else c,kv,kp,ti)")
+    p.add_argument("--chatter-weight", type=float, default=None,
                    help="weight in [0, 1] of the chatter limit against the compliance peak "
-                        "(default 0)")
+                        "(default: [tuning] chatter_weight of the axis, else 0)")
     p.add_argument("--starts", type=int, default=4, help="starting points (default 4)")
+    p.add_argument("--no-simulation", action="store_true",
+                   help="skip the nonlinear LuGre verification sweeps")
+    p.add_argument("--sweep-duration", type=float, default=20.0,
+                   help="duration of each nonlinear sweep 10 -> 100 Hz [s] (default 20, as the "
+                        "paper's Table 3)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="processes for the nonlinear sweeps (default: as many as CPUs, "
+                        "1 = serial)")
     add_output_options(p, default_out="out/tune_AXISNAME")
     p.set_defaults(func=run)
 
@@ -55,15 +64,29 @@ def run(args) -> int:
     axis = load_axis(args.axis)
     out = (report.default_folder(f"tune_{axis.name}") if str(args.out) == "out/tune_AXISNAME"
            else args.out)
-    names = ["results.json", "compliance.png", "bode_before.png", "bode_after.png",
-             "lobes.png", "modes.png"]
+    names = ["report.html", "results.json", "compliance.png", "bode_before.png",
+             "bode_after.png", "lobes.png", "modes.png"]
     report.check_writable([out / n for n in names], args.force)
-    job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
-                    starts=args.starts)
+    simulate = (not args.no_simulation and axis.drive is not None
+                and axis.friction is not None)
+    executor = None
+    if simulate and args.workers != 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(max_workers=args.workers)
+    try:
+        job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
+                        starts=args.starts, simulate=simulate, executor=executor,
+                        sweep_duration=args.sweep_duration)
+    finally:
+        if executor is not None:
+            executor.shutdown()
     results = job.to_dict()
     files = report.write_tuning_files(job, out, args.force)
+    files.append(report.write_html_report(job, out, args.force))
     results["files"] = [str(f) for f in files]
-    report.write_json(out / "results.json", to_jsonable(results), force=True)
+    results["report"] = str(out / "report.html")
+    report.write_json(out / "results.json", to_jsonable(results), force=args.force)
     if args.json:
         print_json(results)
         return 0 if job.result.success else 1
@@ -114,5 +137,13 @@ def run(args) -> int:
     print(("  VERIFIED: " if r.success else "  NOT VERIFIED: ")
           + ("constraints hold on dense grids the optimiser never saw" if r.success
              else "; ".join(r.reasons)))
-    print(f"  wrote {out / 'results.json'} and {len(files)} figures in {out}")
+    if job.nonlinear is not None:
+        for row in job.nonlinear["sweeps"]:
+            agree = [k for k in ("locked", "presliding", "viscous", "describing")
+                     if row[f"agrees_{k}"]]
+            print(f"  nonlinear sweep {row['force_pp_n']:6.0f} N p-p: resonance "
+                  f"{row['resonance_hz']:.1f} Hz, peak {row['peak_m_per_n']:.3g} m/N; agrees "
+                  f"with: {', '.join(agree) or 'none of the linear models'}")
+    print(f"  wrote {out / 'results.json'} and {len(files) - 1} figures")
+    print(f"  report: {out / 'report.html'}")
     return 0 if r.success else 1

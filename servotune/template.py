@@ -1,0 +1,162 @@
+"""A starter axis description: ``servotune init DIR`` writes it.
+
+The template is a complete, loadable axis: a small lumped model of a ball-screw feed axis
+(motor rotor and stator, two guide-way pads, the linear-encoder head and the work piece) in
+``structure.npz``, and an ``axis.toml`` whose every field carries a comment with its unit and
+meaning. Replace the structure by your FE matrices (see the ``[structure]`` comments) and the
+numbers by your axis' data.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .report import check_writable, write_atomically
+
+__all__ = ["template_structure", "write_template", "TEMPLATE_TOML"]
+
+RATIO = 10e-3 / (2 * math.pi)  # 10 mm lead, direct drive [m/rad]
+
+
+def template_structure() -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Mass, stiffness and DOF names of the template's lumped feed axis (SI).
+
+    Motor rotor 0.012 kg m^2 on a torsional bracket (stator 0.03 kg m^2, 2e5 N m/rad);
+    ball screw, nut and bearings 3e8 N/m between r * rotor angle and the slide (r = 10 mm
+    lead / 2 pi); slide 800 kg in two halves at the pads (2e9 N/m between them); encoder head
+    2 kg on 5e8 N/m; table, fixture and work piece 300 kg on 1.5e8 N/m.
+    """
+    dofs = ["motor.rotor", "motor.stator", "pad1.x", "pad2.x", "encoder.x", "wp.x"]
+    idx = {d: i for i, d in enumerate(dofs)}
+    m = np.diag([0.012, 0.03, 400.0, 400.0, 2.0, 300.0])
+    k = np.zeros((6, 6))
+
+    def spring(a, b, value, ca=1.0):
+        vec = np.zeros(6)
+        vec[idx[a]] += ca
+        if b is not None:
+            vec[idx[b]] -= 1.0
+        k[:] += value * np.outer(vec, vec)
+
+    spring("motor.rotor", "pad1.x", 3.0e8, ca=RATIO)
+    spring("motor.stator", None, 2.0e5)
+    spring("pad1.x", "pad2.x", 2.0e9)
+    spring("pad2.x", "encoder.x", 5.0e8)
+    spring("pad2.x", "wp.x", 1.5e8)
+    return m, k, dofs
+
+
+TEMPLATE_TOML = f'''# Axis description for servotune. Values are SI (m, N, s, kg, rad) unless the key says
+# otherwise (_hz, _deg, _db, _rpm, kv_m_per_min_per_mm). Check it with
+#   servotune modes THIS_FOLDER        and tune it with   servotune tune THIS_FOLDER
+
+[axis]
+name = "my_axis"                    # a short name (used for output folders)
+description = "Starter axis written by servotune init: a lumped ball-screw axis"
+
+[structure]
+file = "structure.npz"              # npz with arrays mass, stiffness (n x n) and dofs (n names)
+modal_damping = 0.03                # damping ratio of every mode (or a list, one per mode)
+# FE matrices instead of a reduced model (MatrixMarket .mtx, Harwell-Boeing .rb/.hb, .mat, .npz),
+# reduced by Craig-Bampton on loading to the boundary DOFs plus n_modes fixed-interface modes:
+#   mass = "M.mtx"
+#   stiffness = "K.mtx"
+#   dof_map = "dofs.csv"            # one DOF name per matrix row (header "name")
+#   reduce = {{ boundary = ["pad1.x", "pad2.x", "wp.x", "wp.y", "wp.z", "motor.rotor",
+#                         "motor.stator", "encoder.x"], n_modes = 30 }}   # or f_max_hz = 500.0
+# DOF names: pad<i>.x = relative X at a guide-way pad (slide minus guide way), wp.x/y/z = the
+# work-piece point, motor.rotor/motor.stator = rotations, encoder.x = linear-encoder head.
+
+[friction]                          # all axis friction, lumped at the guide-way pads
+pads = ["pad1.x", "pad2.x"]         # relative-X DOFs of the pads; friction is shared equally
+lugre = "bianchi2014"               # a named set (bianchi2014, canudas1995) or a table of the
+                                    # axis totals: {{ fc = 2198.0, fs = 6013.0, vs = 0.01,
+                                    # delta = 1.0, sigma0 = 5.9e9, sigma1 = 1.6e7,
+                                    # sigma2 = 5578.0 }}  [N, N, m/s, -, N/m, N s/m, N s/m]
+viscous = 5578.0                    # viscous-only model and initial guide-way damping [N s/m]
+# measurements = {{ stribeck = "stribeck.csv" }}   # identify (Fc, Fs, vs, delta, sigma2) from a
+#                                     CSV with columns v_m_per_s, f_n (both velocity signs)
+
+[drive]
+encoder = "linear"                  # position feedback: "linear" (DOF encoder.x) or "motor"
+
+[drive.motor]
+rotor = "motor.rotor"               # rotation DOFs; the torque acts between rotor and stator
+stator = "motor.stator"
+torque_constant = 1.2               # kt [N m/A]
+back_emf_constant = 1.2             # ke [V s/rad]
+resistance = 0.4                    # R [ohm]
+inductance = 3.0e-3                 # L [H]
+
+[drive.transmission]
+ratio = {RATIO!r}         # slide travel per motor radian [m/rad] = lead / (2 pi) / belt ratio
+
+[drive.current_loop]                # PI on the winding current
+kp = 15.0                           # [V/A]
+ti = 2.0e-3                         # [s]
+
+[drive.velocity_loop]               # PI on the motor speed
+kp = 3.7                            # [N m s/rad]
+ti = 12.0e-3                        # [s]
+
+[drive.position_loop]               # P on the position error
+kv_m_per_min_per_mm = 1.0           # the machine-tool Kv factor, or kv = 16.67 [1/s]
+
+# [drive.feedforward]
+# velocity = 1.0                    # velocity feed-forward gain [-]
+# torque_inertia = 0.015            # inertia for the torque feed-forward [kg m^2]
+# [drive.filters]
+# lowpass_hz = 800.0                # 2nd-order low-pass on the torque set-point [Hz]
+# notch_hz = 410.0                  # notch on the torque set-point [Hz]
+# notch_width = 0.5                 # relative -3 dB width [-]
+# notch_depth = 0.1                 # gain at the notch frequency [-]
+
+[cutting]                           # the milling operation for the chatter limit
+teeth = 4
+kt = 2.0e9                          # tangential cutting coefficient [N/m^2]
+kn = 0.6e9                          # normal (radial) cutting coefficient [N/m^2]
+radial_immersion = 0.5              # a/D in (0, 1]
+milling = "down"                    # "down" or "up"
+speed_rpm = [1000.0, 12000.0]       # spindle-speed range [rpm]
+direction = "x"                     # the flexible (feed) direction: "x" or "y"
+
+[requirements]
+ms_velocity_max = 2.0               # largest sensitivity peak of the velocity loop
+ms_position_max = 1.5               # largest sensitivity peak of the position loop
+phase_margin_min_deg = 40.0         # each margin tightens the Ms limits (Ms disk)
+gain_margin_min_db = 6.0
+# kv_min_m_per_min_per_mm = 1.0     # smallest Kv the tuning may choose
+band_hz = [5.0, 300.0]              # band of the compliance-peak objective [Hz]
+depth_required = 2.0e-3             # required axial depth of cut [m]
+
+[tuning]                            # what `servotune tune` may change, and within which bounds
+free = ["c", "kv", "kp", "ti"]      # guide-way damping C, Kv, velocity-loop Kp and Ti
+c = [1.0e3, 1.0e8]                  # [N s/m] (axis total over the pads)
+kv = [1.0, 300.0]                   # [1/s]
+# kp = [0.04, 370.0]                # [N m s/rad] (default: a factor 100 around the initial kp)
+ti = [1.0e-3, 0.2]                  # [s]; <= 0.2 s keeps integral action in the velocity loop
+chatter_weight = 0.0                # 0: compliance peak only; 1: chatter limit only
+'''
+
+
+def write_template(folder, force: bool = False) -> list[Path]:
+    """Write the starter axis (``axis.toml`` and ``structure.npz``) into ``folder``.
+
+    Raises
+    ------
+    OutputExistsError
+        If a file exists and ``force`` is False (nothing is written then).
+    """
+    folder = Path(folder)
+    files = [folder / "axis.toml", folder / "structure.npz"]
+    check_writable(files, force)
+    m, k, dofs = template_structure()
+    buffer = io.BytesIO()
+    np.savez(buffer, mass=m, stiffness=k, dofs=np.array(dofs))
+    write_atomically(files[1], buffer.getvalue(), force)
+    write_atomically(files[0], TEMPLATE_TOML, force)
+    return files
