@@ -314,7 +314,8 @@ def main(argv=None):
 
     load_start = os.getloadavg()[0]
     axis = load_axis(args.axis)
-    problem = tuning_problem(axis)
+    settings = axis.tuning  # as `servotune tune` sets the problem up (tune_axis)
+    problem = tuning_problem(axis, settings.free, settings.chatter_weight, settings.bounds)
 
     # casadi ---------------------------------------------------------------------------
     # the time tune() spends in its own python-control verification (initial and final

@@ -441,8 +441,31 @@ def _exchange_points(problem: TuningProblem, design: Design, models: dict):
     return added_band, added_loop, worst
 
 
+def _starting_points(problem: TuningProblem, starts: int, seed: int):
+    """The initial design, then seeded log-uniform draws within the bounds that are stable,
+    drawn lazily (the sequence does not depend on how many are used)."""
+    x0 = problem.initial_design()
+    yield x0
+    rng = np.random.default_rng(seed)
+    count, draws = 1, 0
+    while count < max(starts, 1) and draws < 20 * starts:
+        draws += 1
+        values = {v: float(math.exp(rng.uniform(*np.log(problem.bounds[v]))))
+                  for v in problem.free}
+        candidate = replace(x0, **values)
+        if _stable(problem, candidate):
+            count += 1
+            yield candidate
+
+
+def _same_optimum(a: Design, f_a: float, b: Design, f_b: float, free) -> bool:
+    """Two optima agree: objectives to 1e-7 and every free variable to 1e-4 (relative)."""
+    return (abs(f_a - f_b) <= 1e-7 * max(abs(f_a), abs(f_b), 1e-300) and all(
+        abs(math.log(getattr(a, v) / getattr(b, v))) <= 1e-4 for v in free))
+
+
 def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 30,
-         tolerance: float = 1e-6) -> TuningResult:
+         tolerance: float = 1e-6, stop_on_agreement: bool = True) -> TuningResult:
     """Optimise the free design variables with casadi/IPOPT, then verify with python-control.
 
     Parameters
@@ -459,6 +482,11 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         Largest number of grid-exchange rounds.
     tolerance : float
         Relative agreement between grid and true extrema that ends the exchange.
+    stop_on_agreement : bool
+        Stop before ``starts`` are used up once two starts reach the same stable optimum
+        (objective to 1e-7, every free variable to 1e-4, relative): two starts from different
+        points landing together is taken as the sign of the dominant basin. ``stats`` reports
+        the starts actually run.
 
     Returns
     -------
@@ -479,30 +507,24 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     h0, s0 = _scale_factors(problem, x0)
     band_grid = _grid(*req.band, problem.n_grid)
     loop_grid = _grid(*req.loop_band, problem.n_grid)
-    rng = np.random.default_rng(seed)
-    designs, draws = [x0], 0
-    while len(designs) < max(starts, 1) and draws < 20 * starts:
-        draws += 1
-        values = {v: float(math.exp(rng.uniform(*np.log(problem.bounds[v]))))
-                  for v in problem.free}
-        candidate = replace(x0, **values)
-        if _stable(problem, candidate):
-            designs.append(candidate)
-
     kernels = _Kernels(problem, h0, s0)
     solver = _Solver(problem, kernels, band_grid.size, loop_grid.size)
     band_model, loop_model = ResponseModel(problem, band_grid), ResponseModel(problem, loop_grid)
     band_rows, loop_rows = band_model.data.rows(), loop_model.data.rows()
     best, runs, iterations = None, [], 0
-    for d in designs:
+    for d in _starting_points(problem, starts, seed):
         new, _, _, f, stats, g = solver.solve(d, band_rows, loop_rows)
         iterations += stats["iter_count"]
+        runs.append((f, new, stats, g))
+        converged = _converged(stats)
+        agree = (stop_on_agreement and converged and best is not None
+                 and _same_optimum(new, f, best[1], best[0], problem.free))
         # stability is checked only where it matters: on a converged design that would
         # become the best (each check interconnects the plant)
-        ok = _converged(stats) and (best is None or f < best[0]) and _stable(problem, new)
-        runs.append((f, new, stats, g))
-        if ok:
+        if converged and (best is None or f < best[0]) and _stable(problem, new):
             best = (f, new, stats, g, solver.last_multipliers)
+        if agree:
+            break
     if best is None:
         f, new, stats, g = min(runs, key=lambda r: max(solver.violations(r[3]).values()))
         viol = solver.violations(g)
@@ -510,7 +532,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         raise RequirementsNotMetError(
             f"the requirements cannot be met within the bounds: the binding constraint is "
             f"'{worst}' (violated by {viol[worst]:.3g} in scaled units at the best of "
-            f"{len(designs)} starts; IPOPT: {stats['return_status']}); relax it or widen the "
+            f"{len(runs)} starts; IPOPT: {stats['return_status']}); relax it or widen the "
             "bounds of the free variables")
 
     design = best[1]
@@ -595,7 +617,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     return TuningResult(
         problem=problem, initial=x0, design=design, before=before, after=after,
         predicted=pred, success=not reasons, reasons=tuple(reasons), active=tuple(active),
-        stats={"starts": len(designs), "iterations": int(iterations), "exchange_rounds": rounds,
+        stats={"starts": len(runs), "starts_requested": starts, "iterations": int(iterations), "exchange_rounds": rounds,
                "grid_points": int(band_grid.size + loop_grid.size),
                "return_status": best[2]["return_status"],
                "time_s": time.perf_counter() - t_start})
