@@ -16,8 +16,8 @@ closed-loop stability, bounds. All methods work in the same log-scaled variables
 * ``scipy_nm``: ``scipy.optimize.minimize(method="Nelder-Mead")`` with bounds, from the same
   starting points as casadi (the initial design plus the same seeded stable draws), restarted
   from its own result until it stops improving; constraints by an exact (L1) penalty
-  ``f + rho * sum(max(0, 1 - g_i))`` with rho = 10 (about 50 times the largest multiplier
-  IPOPT reports at the optimum), unstable designs get +inf.
+  ``f + rho * sum(max(0, 1 - g_i))`` with rho = 10 (large enough: the penalised optimum is
+  the constrained one the other methods find), unstable designs get +inf.
 
 The scipy objective evaluates :class:`servotune.tuning.ResponseModel` (the same port-coupled
 responses as casadi, numerically) on ONE fixed log grid over the loop band (``--grid`` points;
@@ -58,11 +58,11 @@ import time  # noqa: E402
 from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+import casadi  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 from scipy.optimize import NonlinearConstraint, differential_evolution, minimize  # noqa: E402
 
-import casadi  # noqa: E402
 from servotune.axis import load_axis  # noqa: E402
 from servotune.design import tuning_problem  # noqa: E402
 from servotune.plant import Contact, UnstableLoopError, build_plant  # noqa: E402
@@ -93,7 +93,7 @@ class ClosedLoopMatrix:
         m = np.array([self.monomials(d) for d in fit])
         a = np.array([self._exact(d).ravel() for d in fit])
         coef, *_ = np.linalg.lstsq(m, a, rcond=None)
-        self.n = int(math.isqrt(a.shape[1]))
+        self.n = math.isqrt(a.shape[1])
         self.coef = coef
         self.fit_error = max(
             float(np.abs(self(d) - self._exact(d)).max() / np.abs(self._exact(d)).max())
@@ -195,7 +195,7 @@ class GridObjective:
         return self.values(u)[0]
 
     def constraints(self, u) -> np.ndarray:
-        f, g, stable = self.values(u)
+        _, g, stable = self.values(u)
         return np.append(g, 1.0 if stable else -1.0)
 
     def penalised(self, u) -> float:

@@ -20,10 +20,10 @@ __all__ = ["Performance", "TuningResult", "tune", "verify"]
 HZ = 1.0 / (2.0 * math.pi)
 #: :func:`tune` re-solves on the full initial grid the best stable optimum of the coarse grid
 #: and every other one within ``POLISH_BAND`` of it (relative objective), as the coarse grid
-#: may rank close optima wrongly; a re-solve that fails passes its turn to the next optimum,
-#: at most ``2 * POLISHED`` times.
-POLISHED = 2
+#: may rank close optima wrongly; a re-solve that fails passes its turn to the next optimum;
+#: at most ``POLISH_ATTEMPTS`` re-solves in all.
 POLISH_BAND = 0.1
+POLISH_ATTEMPTS = 4
 
 
 @dataclass(frozen=True)
@@ -540,8 +540,8 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     full = _Solver(problem, kernels, band_grid.size, loop_grid.size, warm=True, max_iter=120)
     best, examined, polished, attempts, f_ref = None, [], 0, 0, None
     converged = [r for r in runs if _converged(r[2])]
-    for f, new, stats, g, (lam_x, lam_g) in sorted(converged, key=lambda r: r[0]):
-        if attempts >= 2 * POLISHED or (f_ref is not None and f > f_ref * (1 + POLISH_BAND)):
+    for f, new, _, _, (lam_x, lam_g) in sorted(converged, key=lambda r: r[0]):
+        if attempts >= POLISH_ATTEMPTS or (f_ref is not None and f > f_ref * (1 + POLISH_BAND)):
             break
         if any(_same_optimum(new, f, d, fd, problem.free) for fd, d in examined):
             continue
@@ -672,7 +672,8 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     return TuningResult(
         problem=problem, initial=x0, design=design, before=before, after=after,
         predicted=pred, success=not reasons, reasons=tuple(reasons), active=tuple(active),
-        stats={"starts": n_starts, "polished": polished, "iterations": int(iterations), "exchange_rounds": rounds,
+        stats={"starts": n_starts, "polished": polished, "iterations": int(iterations),
+               "exchange_rounds": rounds,
                "grid_points": int(band_grid.size + loop_grid.size),
                "return_status": best[2]["return_status"],
                "time_s": time.perf_counter() - t_start})
