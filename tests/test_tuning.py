@@ -12,6 +12,7 @@ from servotune.frequency import compliance as plant_compliance
 from servotune.plant import Contact, build_plant, loop_transfer
 from servotune.structure import ModalModel
 from servotune.tuning import (
+    ChatterTarget,
     Design,
     Requirements,
     RequirementsNotMetError,
@@ -143,3 +144,63 @@ def test_requirements_margins_tighten_ms():
     req = Requirements(ms_velocity_max=3.0, phase_margin_min_deg=45.0, gain_margin_min_db=6.0)
     # PM 45 deg needs Ms <= 1/(2 sin 22.5 deg) = 1.307; GM 6 dB needs Ms <= 2
     assert req.ms_limit("velocity") == pytest.approx(1.0 / (2 * math.sin(math.radians(22.5))))
+
+
+@pytest.mark.parametrize("active", ["objective and peak", "chatter", "Ms loops", "kv_min"])
+def test_hessian_given_to_ipopt_matches_finite_differences_of_the_port_model(active):
+    # The Hessian of the Lagrangian IPOPT receives is assembled from per-frequency kernel
+    # Hessians (chain rule through the log variables, the epigraph t, the tracking term, kv_min);
+    # check it against central differences of the same Lagrangian evaluated with numpy
+    # (ResponseModel), one constraint group at a time so each is seen at its own scale.
+    from servotune.tuning.solve import _Kernels, _Solver
+
+    structure, drive = small_axis(), small_drive()
+    req = Requirements(ms_velocity_max=1.6, ms_position_max=1.4, kv_min=5.0)
+    problem = TuningProblem(structure, PADS, c=5e4, drive=drive, free=("c", "kv", "kp", "ti"),
+                            requirements=req, weights=(0.6, 0.4),
+                            chatter=ChatterTarget(kt=6e8, mu=0.5))
+    x0 = problem.initial_design()
+    band_model = ResponseModel(problem, np.geomspace(*req.band, 7))
+    loop_model = ResponseModel(problem, np.geomspace(2 * np.pi * 20, 2 * np.pi * 2000, 9))
+    h0 = float(np.abs(band_model(x0)["compliance"]).max())
+    s0 = 1e-7
+    solver = _Solver(problem, _Kernels(problem, h0, s0), 7, 9)
+    params = np.concatenate([band_model.data.rows().ravel(order="F"),
+                             loop_model.data.rows().ravel(order="F")])
+    groups = np.array(solver.groups)
+    rng = np.random.default_rng(7)
+    lam_g = rng.uniform(0.2, 1.0, groups.size)
+    lam_f = 0.8 if active == "objective and peak" else 0.0
+    keep = {"objective and peak": ["compliance peak"], "chatter": ["chatter"],
+            "Ms loops": ["Ms velocity loop", "Ms position loop"], "kv_min": ["kv_min"]}[active]
+    lam_g[~np.isin(groups, keep)] = 0.0
+    ms = [req.ms_limit("velocity"), req.ms_limit("position")]
+
+    def lagrangian(x):
+        d = Design(**{v: getattr(x0, v) * math.exp(x[i]) for i, v in enumerate(problem.free)})
+        t, q = x[4], x[5]
+        loops = loop_model(d)
+        h = band_model(d)["compliance"]
+        g = np.concatenate([
+            np.abs(h) ** 2 / h0**2 - t**2,
+            0.5 * h.real / s0 + q,
+            ms[0] ** 2 * np.abs(1 + loops["loop_velocity"]) ** 2,
+            ms[1] ** 2 * np.abs(1 + loops["loop_position"]) ** 2,
+            [d.kv - req.kv_min]])
+        f = 0.6 * t + 0.4 * q + problem.tracking_weight * x0.kv / d.kv
+        return lam_f * f + lam_g @ g
+
+    x = np.array([0.3, -0.2, 0.1, 0.4, 0.9, 0.0])
+    step = 1e-4
+    n = x.size
+    fd = np.zeros((n, n))
+    for i in range(n):
+        for j in range(n):
+            ei, ej = np.eye(n)[i] * step, np.eye(n)[j] * step
+            fd[i, j] = (lagrangian(x + ei + ej) - lagrangian(x + ei - ej)
+                        - lagrangian(x - ei + ej) + lagrangian(x - ei - ej)) / (4 * step**2)
+    upper = np.array(solver.hessian(x, params, lam_f, lam_g))
+    exact = upper + upper.T - np.diag(np.diag(upper))
+    # central differences: truncation ~ step^2 = 1e-8 relative, round-off ~ 1e-16/step^2
+    assert_allclose(exact, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+    assert np.abs(fd).max() > 0

@@ -25,10 +25,16 @@ closes around the scalar port receptances (torque port e = rotor - stator, feedb
             + (a + b) j w P_phi)
     x/F   = R_c[wp, wp] + R_c[wp, e] T/F
 
-Each complex quantity is carried as a (real, imaginary) pair of casadi expressions vectorised
-over the frequency grid, so IPOPT gets exact derivatives. Peak and Ms constraints are semi-
-infinite; they are imposed on a grid that is refined by exchange: after each solve the true
-extrema are located on a fine grid, refined by bounded scalar search and added to the grid,
+Each complex quantity is carried as a (real, imaginary) pair of casadi expressions, so IPOPT
+gets exact derivatives. The expressions are written once for ONE frequency, with the port data
+of that frequency (R_ab, a_i b_i, lambda_i, C_i, F) as symbols, in the log-scaled variables
+u = log(x / x0); casadi maps these kernels over the grids, whose port data are parameters of
+the NLP. The symbolic work therefore does not grow with the grid, a refined grid costs only new
+parameter values, and the exact Hessian of the Lagrangian is assembled from the kernels'
+Hessians (summed over the frequencies with their multipliers). Peak and Ms constraints are
+semi-infinite; they are imposed on a grid that is refined by exchange: after each solve the
+true extrema are located on a fine grid, refined by bounded scalar search and added to the
+grid, and the problem is re-solved warm (the multipliers of the old grid points carry over)
 until the grid and the true values agree.
 
 After solving, :func:`verify` checks the design independently with python-control on the

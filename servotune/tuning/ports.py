@@ -71,13 +71,80 @@ class _Cx:
 
 @dataclass(frozen=True)
 class _PortData:
-    """Structure receptances at the ports on a frequency grid, prepared for C coupling."""
+    """Structure receptances at the ports on a frequency grid, prepared for C coupling, with
+    the fixed parts of the drive (current PI, set-point filters) at the same frequencies."""
 
     omega: np.ndarray
     pairs: dict  # (a, b) -> R_ab (K,) complex
     alpha: dict  # (a, b) -> (K, n_pads) complex
     lam: np.ndarray  # (K, n_pads)
     n_pads: int
+    current: np.ndarray | None = None  # current PI C_i(jw) (K,) complex
+    filt: np.ndarray | None = None  # set-point filters F(jw) (K,) complex
+
+    def pair(self, a: str, b: str) -> _Cx:
+        return _Cx.of(self.pairs[(a, b)])
+
+    def mode(self, a: str, b: str, i: int) -> tuple[_Cx, _Cx]:
+        """(alpha_i, lambda_i) of pad eigen-direction i."""
+        return _Cx.of(self.alpha[(a, b)][:, i]), _Cx.of(self.lam[:, i])
+
+    def drive_parts(self) -> tuple[_Cx, _Cx]:
+        return _Cx.of(self.current), _Cx.of(self.filt)
+
+    def rows(self) -> np.ndarray:
+        """All data as real rows (n_rows, K), in the order :class:`_SymbolicPorts` reads."""
+        out = [self.omega]
+        for key, value in self.pairs.items():
+            out += [value.real, value.imag]
+            for i in range(self.n_pads):
+                out += [self.alpha[key][:, i].real, self.alpha[key][:, i].imag]
+        for i in range(self.n_pads):
+            out += [self.lam[:, i].real, self.lam[:, i].imag]
+        if self.current is not None:
+            out += [self.current.real, self.current.imag, self.filt.real, self.filt.imag]
+        return np.array(out)
+
+
+class _SymbolicPorts:
+    """The port data of ONE frequency as symbols (a column of :meth:`_PortData.rows`), so the
+    responses become a casadi function of (design, data) that is mapped over the grid."""
+
+    def __init__(self, problem: TuningProblem, symbol):
+        _, vec = _port_vectors(problem)
+        self.n_pads = len(problem.pads)
+        rows = iter(range(symbol.shape[0]))
+
+        def cx():
+            return _Cx(symbol[next(rows)], symbol[next(rows)])
+
+        self.omega = symbol[next(rows)]
+        self.pairs, self.modes = {}, {}
+        for a in vec:
+            for b in vec:
+                self.pairs[(a, b)] = cx()
+                self.modes[(a, b)] = [cx() for _ in range(self.n_pads)]
+        self.lam = [cx() for _ in range(self.n_pads)]
+        self.current = self.filt = None
+        if problem.drive is not None:
+            self.current, self.filt = cx(), cx()
+        if next(rows, None) is not None:
+            raise ValueError("port data rows do not match the problem")
+
+    @staticmethod
+    def size(problem: TuningProblem) -> int:
+        _, vec = _port_vectors(problem)
+        n = 1 + len(vec) ** 2 * 2 * (1 + len(problem.pads)) + 2 * len(problem.pads)
+        return n + (4 if problem.drive is not None else 0)
+
+    def pair(self, a: str, b: str) -> _Cx:
+        return self.pairs[(a, b)]
+
+    def mode(self, a: str, b: str, i: int) -> tuple[_Cx, _Cx]:
+        return self.modes[(a, b)][i], self.lam[i]
+
+    def drive_parts(self) -> tuple[_Cx, _Cx]:
+        return self.current, self.filt
 
 
 def _port_vectors(problem: TuningProblem) -> tuple[list[str], dict]:
@@ -132,23 +199,30 @@ def _port_data(problem: TuningProblem, omega: np.ndarray) -> _PortData:
                 left = np.einsum("kp,kpq->kq", (vec[a] @ rec)[:, pad_idx], u)
                 right = np.einsum("kqp,kp->kq", u_inv, rec_b[b][:, pad_idx])
                 alpha[(a, b)] = left * right
-    return _PortData(omega, pairs, alpha, lam, n_p)
+    current = filt = None
+    if problem.drive is not None:
+        drive = problem.drive
+        current = np.asarray(drive.current_loop.transfer_function()(1j * omega)).reshape(-1)
+        filt = np.asarray(drive.torque_filter()(1j * omega)).reshape(-1)
+        current = np.broadcast_to(current, omega.shape).astype(complex)
+        filt = np.broadcast_to(filt, omega.shape).astype(complex)
+    return _PortData(omega, pairs, alpha, lam, n_p, current, filt)
 
 
-def _responses(problem: TuningProblem, data: _PortData, design) -> dict:
+def _responses(problem: TuningProblem, data, design) -> dict:
     """Compliance, loop transfer functions as _Cx over the grid, for numeric or symbolic
-    design values (a mapping with keys c, kv, kp, ti)."""
-    s = _Cx(np.zeros_like(data.omega), data.omega)
-    z = None
+    design values (a mapping with keys c, kv, kp, ti) and numeric (:class:`_PortData`) or
+    symbolic (:class:`_SymbolicPorts`) port data."""
+    s = _Cx(0.0 * data.omega, data.omega)
+    weights = []  # z / (1 + z lambda_i), shared by every port pair
     if data.n_pads:
         z = (problem.contact_stiffness + s * design["c"]) / data.n_pads
+        weights = [z / (1.0 + z * data.mode("wp", "wp", i)[1]) for i in range(data.n_pads)]
 
     def rc(a, b):
-        out = _Cx.of(data.pairs[(a, b)])
-        if z is not None:
-            for i in range(data.n_pads):
-                out = out - z * _Cx.of(data.alpha[(a, b)][:, i]) / (
-                    1.0 + z * _Cx.of(data.lam[:, i]))
+        out = data.pair(a, b)
+        for i, w in enumerate(weights):
+            out = out - w * data.mode(a, b, i)[0]
         return out
 
     h_ww = rc("wp", "wp")
@@ -157,8 +231,7 @@ def _responses(problem: TuningProblem, data: _PortData, design) -> dict:
     if drive is None:
         return out
     m = drive.motor
-    ci = _Cx.of(np.asarray(drive.current_loop.transfer_function()(1j * data.omega)))
-    filt = _Cx.of(np.asarray(drive.torque_filter()(1j * data.omega)).reshape(-1))
+    ci, filt = data.drive_parts()
     cv = design["kp"] * (1.0 + 1.0 / (s * design["ti"]))
     den = s * m.inductance + m.resistance + ci
     a = ci * filt * cv

@@ -12,12 +12,18 @@ import numpy as np
 
 from .. import frequency
 from ..plant import Contact, UnstableLoopError, build_plant, loop_transfer
-from .ports import ResponseModel, _grid, _port_data, _responses, evaluate
+from .ports import ResponseModel, _grid, _responses, _SymbolicPorts, evaluate
 from .problem import VARIABLES, Design, RequirementsNotMetError, TuningProblem
 
 __all__ = ["Performance", "TuningResult", "tune", "verify"]
 
 HZ = 1.0 / (2.0 * math.pi)
+#: :func:`tune` re-solves on the full initial grid the best stable optimum of the coarse grid
+#: and every other one within ``POLISH_BAND`` of it (relative objective), as the coarse grid
+#: may rank close optima wrongly; a re-solve that fails passes its turn to the next optimum;
+#: at most ``POLISH_ATTEMPTS`` re-solves in all.
+POLISH_BAND = 0.1
+POLISH_ATTEMPTS = 4
 
 
 @dataclass(frozen=True)
@@ -138,19 +144,64 @@ def _scale_factors(problem: TuningProblem, design: Design):
     return float(np.abs(h).max()), float(max(-(mu * h.real).min(), 1e-30))
 
 
-class _Solver:
-    """The casadi NLP on a given grid, rebuilt when the grid changes."""
+class _Kernels:
+    """The constraint functions at ONE frequency as casadi functions of (u, port data), with
+    u = log(x / x0) the scaled free variables, and the Hessians of their weighted sums.
 
-    def __init__(self, problem: TuningProblem, band_grid, loop_grid, h0, s0):
+    The NLP maps them over the grids, so the symbolic work does not grow with the number of
+    frequencies, and a new grid costs only new parameter values (:class:`_Solver`).
+    """
+
+    def __init__(self, problem: TuningProblem, h0: float, s0: float):
+        x0 = problem.initial_design()
+        free = problem.free
+        u = ca.SX.sym("u", len(free))
+        d = ca.SX.sym("d", _SymbolicPorts.size(problem))
+        values = {v: getattr(x0, v) or 0.0 for v in VARIABLES}
+        for i, v in enumerate(free):
+            values[v] = getattr(x0, v) * ca.exp(u[i])
+        resp = _responses(problem, _SymbolicPorts(problem, d), values)
+        h = resp["compliance"]
+        w_peak, w_chatter = problem.weights
+        band = []
+        if w_peak > 0:
+            band.append(h.abs2() / h0**2)
+        if w_chatter > 0:
+            band.append(problem.chatter.mu * h.re / s0)
+        self.band, self.band_hessian = self._pair("band", u, d, ca.vertcat(*band))
+        self.loop = self.loop_hessian = None
+        if problem.drive is not None:
+            self.loop, self.loop_hessian = self._pair("loop", u, d, ca.vertcat(
+                (1.0 + resp["loop_velocity"]).abs2(), (1.0 + resp["loop_position"]).abs2()))
+
+    @staticmethod
+    def _pair(name, u, d, out):
+        """The function and the Hessian in u of its outputs weighted by multipliers."""
+        lam = ca.SX.sym("lam", out.numel())
+        hessian = ca.hessian(ca.dot(lam, out), u)[0]
+        return (ca.Function(name, [u, d], [out]),
+                ca.Function(f"{name}_hessian", [u, d, lam], [ca.densify(hessian)]))
+
+
+class _Solver:
+    """The casadi NLP for grids of given sizes; the grids' port data are its parameters.
+
+    The Hessian of the Lagrangian is assembled from the per-frequency Hessians of the kernels
+    (mapped and summed) instead of casadi's generic second-order sweep over the whole NLP,
+    which costs several times more per iteration.
+    """
+
+    def __init__(self, problem: TuningProblem, kernels: _Kernels, n_band: int, n_loop: int,
+                 warm: bool = False, max_iter: int = 500):
         self.problem = problem
+        self.kernels = kernels
         req = problem.requirements
         x0 = problem.initial_design()
         self.free = problem.free
+        nf = len(self.free)
         self.scale = {v: getattr(x0, v) for v in self.free}
-        p = ca.MX.sym("p", len(self.free))
-        values = {v: getattr(x0, v) for v in VARIABLES}
-        for i, v in enumerate(self.free):
-            values[v] = self.scale[v] * ca.exp(p[i])
+        p = ca.MX.sym("p", nf)
+        kv = self.scale["kv"] * ca.exp(p[self.free.index("kv")]) if "kv" in self.free else None
         t = ca.MX.sym("t")  # scaled compliance peak
         q = ca.MX.sym("q")  # scaled -min Re G
         w_peak, w_chatter = problem.weights
@@ -163,54 +214,117 @@ class _Solver:
             ubg.extend([hi] * n)
             self.groups.extend([group] * n)
 
-        band = _port_data(problem, band_grid)
-        resp = _responses(problem, band, values)
-        h = resp["compliance"]
+        n_rows = kernels.band.size1_in(1)
+        data_band = ca.MX.sym("band", n_rows, n_band)
+        params = [ca.vec(data_band)]
+        band = kernels.band.map(n_band)(p, data_band)
+        row, band_rows = 0, []  # which constraint group weights each band output
         if w_peak > 0:
-            add(h.abs2() / h0**2 - t * t, -ca.inf, 0.0, "compliance peak")
+            add(band[row, :].T - t * t, -ca.inf, 0.0, "compliance peak")
+            band_rows.append(("compliance peak", 1.0))
+            row += 1
         if w_chatter > 0:
-            add(problem.chatter.mu * h.re / s0 + q, 0.0, ca.inf, "chatter")
+            add(band[row, :].T + q, 0.0, ca.inf, "chatter")
+            band_rows.append(("chatter", 1.0))
+        loop_rows = []
         if problem.drive is not None:
-            loops = _responses(problem, _port_data(problem, loop_grid), values)
-            for loop in ("velocity", "position"):
+            data_loop = ca.MX.sym("loop", n_rows, n_loop)
+            params.append(ca.vec(data_loop))
+            loops = kernels.loop.map(n_loop)(p, data_loop)
+            for i, loop in enumerate(("velocity", "position")):
                 ms = req.ms_limit(loop)
-                add((1.0 + loops[f"loop_{loop}"]).abs2() * ms**2, 1.0, ca.inf, f"Ms {loop} loop")
-            if "kv" in self.free and req.kv_min > 0:
-                add(values["kv"] - req.kv_min, 0.0, ca.inf, "kv_min")
+                add(loops[i, :].T * ms**2, 1.0, ca.inf, f"Ms {loop} loop")
+                loop_rows.append((f"Ms {loop} loop", ms**2))
+            if kv is not None and req.kv_min > 0:
+                add(kv - req.kv_min, 0.0, ca.inf, "kv_min")
         objective = (w_peak * t if w_peak > 0 else 0) + (w_chatter * q if w_chatter > 0 else 0)
-        if "kv" in self.free and problem.tracking_weight > 0:
-            objective = objective + problem.tracking_weight * x0.kv / values["kv"]
+        if kv is not None and problem.tracking_weight > 0:
+            objective = objective + problem.tracking_weight * x0.kv / kv
         x = ca.vertcat(p, t, q)
-        self.nlp = {"x": x, "f": objective, "g": ca.vertcat(*g)}
+        self.nlp = {"x": x, "p": ca.vertcat(*params), "f": objective, "g": ca.vertcat(*g)}
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)
-        self.solver = ca.nlpsol("tune", "ipopt", self.nlp, {
-            "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-            "ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8, "ipopt.max_iter": 500,
-            "ipopt.mu_strategy": "adaptive", "ipopt.hessian_approximation": "limited-memory"})
-        # limited-memory Hessian: with a handful of variables and hundreds of frequency
-        # constraints, building the exact Hessian of the Lagrangian costs more than it saves
+
+        # Hessian of the Lagrangian lam_f f + lam_g . g
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(lbg))
+        groups = np.array(self.groups)
+
+        def weights(rows):
+            return ca.vertcat(*[scale * lam_g[np.nonzero(groups == group)[0].tolist()].T
+                                for group, scale in rows])
+
+        hess_p = kernels.band_hessian.map(f"band_hessian_{n_band}", "serial", n_band, [0],
+                                          [0])(p, data_band, weights(band_rows))
+        if loop_rows:
+            hess_p += kernels.loop_hessian.map(f"loop_hessian_{n_loop}", "serial", n_loop, [0],
+                                               [0])(p, data_loop, weights(loop_rows))
+        rest = lam_f * objective + (lam_g[len(lbg) - 1] * g[-1] if "kv_min" in self.groups
+                                    else 0)  # the terms in p without frequencies
+        hess_rest = ca.hessian(rest, x)[0]
+        peak = np.nonzero(groups == "compliance peak")[0].tolist()
+        hess_t = -2.0 * ca.sum1(lam_g[peak]) if peak else ca.MX(0)
+        hessian = ca.blockcat([[hess_p, ca.MX(nf, 2)],
+                               [ca.MX(2, nf), ca.diagcat(hess_t, ca.MX(0))]]) + hess_rest
+        self.hessian = ca.Function("hess_lag", [x, self.nlp["p"], lam_f, lam_g],
+                                   [ca.triu(ca.densify(hessian))],
+                                   ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+        options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                   "ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8, "ipopt.max_iter": max_iter,
+                   "ipopt.mu_strategy": "adaptive", "hess_lag": self.hessian}
+        if warm:
+            options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
+                            "ipopt.warm_start_bound_push": 1e-9,
+                            "ipopt.warm_start_mult_bound_push": 1e-9})
+        self.solver = ca.nlpsol("tune", "ipopt", self.nlp, options)
         lo = [math.log(problem.bounds[v][0] / self.scale[v]) for v in self.free]
         hi = [math.log(problem.bounds[v][1] / self.scale[v]) for v in self.free]
         self.lbx = np.array([*lo, 0.0, -ca.inf])
         self.ubx = np.array([*hi, ca.inf, ca.inf])
         self.w_peak, self.w_chatter = w_peak, w_chatter
+        self.n_band, self.n_loop = n_band, n_loop
 
-    def solve(self, design: Design, t0: float, q0: float, region: float | None = None):
-        """Solve from ``design``; ``region`` limits each log-variable to +-region around it
-        (a trust region that keeps the step continuous, see :func:`tune`)."""
+    def _values(self, design: Design) -> np.ndarray:
+        return np.array([math.log(getattr(design, v) / self.scale[v]) for v in self.free])
+
+    def start(self, design: Design, band_rows: np.ndarray) -> tuple[float, float]:
+        """Epigraph variables (t, q) that make the grid constraints of ``design`` hold."""
+        band = np.array(self.kernels.band.map(band_rows.shape[1])(
+            self._values(design), band_rows))
+        row, t0, q0 = 0, 1.0, 1.0
+        if self.w_peak > 0:
+            t0 = float(np.sqrt(band[row].max()))
+            row += 1
+        if self.w_chatter > 0:
+            q0 = float(-band[row].min())
+        return t0, q0
+
+    def solve(self, design: Design, band_rows, loop_rows, region: float | None = None,
+              t0: float | None = None, q0: float | None = None, multipliers=None):
+        """Solve from ``design`` on the grids whose port data are ``band_rows`` and
+        ``loop_rows`` (:meth:`_PortData.rows`); ``region`` limits each log-variable to
+        +-region around it (a trust region that keeps the step continuous, see :func:`tune`);
+        ``multipliers`` = (lam_x, lam_g) warm-starts a solver built with ``warm=True``."""
         p0 = [math.log(getattr(design, v) / self.scale[v]) for v in self.free]
+        if t0 is None or q0 is None:
+            t0, q0 = self.start(design, band_rows)
         lbx, ubx = self.lbx.copy(), self.ubx.copy()
         if region is not None:
             n = len(p0)
             lbx[:n] = np.maximum(lbx[:n], np.array(p0) - region)
             ubx[:n] = np.minimum(ubx[:n], np.array(p0) + region)
-        sol = self.solver(x0=np.array([*p0, t0, q0]), lbx=lbx, ubx=ubx,
-                          lbg=self.lbg, ubg=self.ubg)
+        params = [band_rows.ravel(order="F")]
+        if loop_rows is not None and self.problem.drive is not None:
+            params.append(loop_rows.ravel(order="F"))
+        args = {"x0": np.array([*p0, t0, q0]), "lbx": lbx, "ubx": ubx, "lbg": self.lbg,
+                "ubg": self.ubg, "p": np.concatenate(params)}
+        if multipliers is not None:
+            args["lam_x0"], args["lam_g0"] = multipliers
+        sol = self.solver(**args)
         stats = self.solver.stats()
         x = np.array(sol["x"]).ravel()
         values = {v: float(self.scale[v] * math.exp(x[i])) for i, v in enumerate(self.free)}
         new = replace(design, **values)
         g = np.array(sol["g"]).ravel()
+        self.last_multipliers = (np.array(sol["lam_x"]).ravel(), np.array(sol["lam_g"]).ravel())
         return new, float(x[-2]), float(x[-1]), float(sol["f"]), stats, g
 
     def violations(self, g: np.ndarray) -> dict:
@@ -219,6 +333,27 @@ class _Solver:
             v = max(lo - gi, gi - hi, 0.0)
             out[group] = max(out.get(group, 0.0), v)
         return out
+
+
+def _moved_multipliers(solver: _Solver, lam_g: np.ndarray, band: tuple, loop: tuple):
+    """Constraint multipliers of the previous grids placed on the refined grids (the refined
+    grid holds every old point; new points get zero)."""
+    out = np.zeros(len(solver.groups))
+    groups = np.array(solver.groups)
+    old_pos, new_pos = 0, 0
+    for group in dict.fromkeys(solver.groups):
+        n_new = int(np.sum(groups == group))
+        if group in ("compliance peak", "chatter"):
+            old, new = band
+        elif group.startswith("Ms"):
+            old, new = loop
+        else:
+            old = new = np.zeros(n_new)
+        where = np.searchsorted(new, old) if old.size != new.size else np.arange(n_new)
+        out[new_pos + where] = lam_g[old_pos:old_pos + old.size]
+        old_pos += old.size
+        new_pos += n_new
+    return out
 
 
 def _stable(problem: TuningProblem, design: Design) -> bool:
@@ -312,9 +447,39 @@ def _exchange_points(problem: TuningProblem, design: Design, models: dict):
     return added_band, added_loop, worst
 
 
+def _starting_points(problem: TuningProblem, starts: int, seed: int):
+    """The initial design, then seeded log-uniform draws within the bounds that are stable,
+    drawn lazily (the sequence does not depend on how many are used)."""
+    x0 = problem.initial_design()
+    yield x0
+    rng = np.random.default_rng(seed)
+    count, draws = 1, 0
+    while count < max(starts, 1) and draws < 20 * starts:
+        draws += 1
+        values = {v: float(math.exp(rng.uniform(*np.log(problem.bounds[v]))))
+                  for v in problem.free}
+        candidate = replace(x0, **values)
+        if _stable(problem, candidate):
+            count += 1
+            yield candidate
+
+
+def _same_optimum(a: Design, f_a: float, b: Design, f_b: float, free) -> bool:
+    """Two optima agree: objectives to 1e-6 and every free variable to 1e-3 (relative)."""
+    return (abs(f_a - f_b) <= 1e-6 * max(abs(f_a), abs(f_b), 1e-300) and all(
+        abs(math.log(getattr(a, v) / getattr(b, v))) <= 1e-3 for v in free))
+
+
 def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 30,
          tolerance: float = 1e-6) -> TuningResult:
     """Optimise the free design variables with casadi/IPOPT, then verify with python-control.
+
+    The search has three stages: every starting point is solved on a coarse grid (every third
+    point of the initial grid, at about a third of the cost); the best stable optimum and any
+    within :data:`POLISH_BAND` of it are re-solved on the full initial grid, warm (the coarse
+    points keep their multipliers); the best of those enters the grid exchange. Should no
+    coarse optimum survive (the coarse grid can have spurious, unstable optima), every start
+    is solved again on the full grid.
 
     Parameters
     ----------
@@ -323,7 +488,10 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         Number of starting points: the initial design plus seeded log-uniform draws within the
         bounds; unstable draws are skipped (the frequency constraints keep a design stable only
         along continuous paths from a stable one, so every start must be stable), and every
-        optimum is checked for closed-loop stability before it is accepted.
+        optimum is checked for closed-loop stability before it is accepted. Tuning problems
+        of feed axes have several local optima (on the bundled axis a fast velocity PI and an
+        almost proportional one, 20% apart in the objective; a random start reaches the better
+        one about one time in three): more starts make finding the best more likely.
     seed : int
         Seed of the starting points.
     max_exchange : int
@@ -350,57 +518,109 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     h0, s0 = _scale_factors(problem, x0)
     band_grid = _grid(*req.band, problem.n_grid)
     loop_grid = _grid(*req.loop_band, problem.n_grid)
-    rng = np.random.default_rng(seed)
-    designs, draws = [x0], 0
-    while len(designs) < max(starts, 1) and draws < 20 * starts:
-        draws += 1
-        values = {v: float(math.exp(rng.uniform(*np.log(problem.bounds[v]))))
-                  for v in problem.free}
-        candidate = replace(x0, **values)
-        if _stable(problem, candidate):
-            designs.append(candidate)
+    kernels = _Kernels(problem, h0, s0)
+    band_model, loop_model = ResponseModel(problem, band_grid), ResponseModel(problem, loop_grid)
+    band_rows, loop_rows = band_model.data.rows(), loop_model.data.rows()
 
-    solver = _Solver(problem, band_grid, loop_grid, h0, s0)
-    best, runs, iterations = None, [], 0
-    for d in designs:
-        new, _, _, f, stats, g = solver.solve(d, 1.0, 1.0)
+    # 1. every start on the coarse grid
+    step = max(1, problem.n_grid // 20)
+    coarse = _Solver(problem, kernels, band_grid[::step].size, loop_grid[::step].size,
+                     max_iter=200)
+    runs, iterations, start_designs = [], 0, []
+    for d in _starting_points(problem, starts, seed):
+        new, _, _, f, stats, g = coarse.solve(d, band_rows[:, ::step], loop_rows[:, ::step])
         iterations += stats["iter_count"]
-        ok = _converged(stats) and _stable(problem, new)
-        runs.append((f, new, stats, g))
-        if ok and (best is None or f < best[0]):
-            best = (f, new, stats, g)
+        runs.append((f, new, stats, g, coarse.last_multipliers))
+        start_designs.append(d)
+    n_starts = len(runs)
+
+    # 2. the best distinct stable optima polished on the full initial grid
+    # a coarse optimum in a good basin moves little on the full grid (about 10-30 warm
+    # iterations); one that needs many more is left for the next candidate
+    full = _Solver(problem, kernels, band_grid.size, loop_grid.size, warm=True, max_iter=120)
+    best, examined, polished, attempts, f_ref = None, [], 0, 0, None
+    converged = [r for r in runs if _converged(r[2])]
+    for f, new, _, _, (lam_x, lam_g) in sorted(converged, key=lambda r: r[0]):
+        if attempts >= POLISH_ATTEMPTS or (f_ref is not None and f > f_ref * (1 + POLISH_BAND)):
+            break
+        if any(_same_optimum(new, f, d, fd, problem.free) for fd, d in examined):
+            continue
+        examined.append((f, new))
+        if not _stable(problem, new):
+            continue
+        attempts += 1
+        multipliers = (lam_x, _moved_multipliers(full, lam_g, (band_grid[::step], band_grid),
+                                                 (loop_grid[::step], loop_grid)))
+        design, _, _, f_full, stats_full, g_full = full.solve(new, band_rows, loop_rows,
+                                                              multipliers=multipliers)
+        iterations += stats_full["iter_count"]
+        if _converged(stats_full) and _stable(problem, design):
+            polished += 1
+            f_ref = f if f_ref is None else f_ref
+            if best is None or f_full < best[0]:
+                best = (f_full, design, stats_full, g_full, full.last_multipliers)
     if best is None:
-        f, new, stats, g = min(runs, key=lambda r: max(solver.violations(r[3]).values()))
-        viol = solver.violations(g)
+        # 3'. no coarse optimum survived (spurious or unstable optima of the coarse grid, or
+        # re-solves that did not converge): every start once more, on the full grid
+        cold = _Solver(problem, kernels, band_grid.size, loop_grid.size)
+        for d in start_designs:
+            new, _, _, f, stats, g = cold.solve(d, band_rows, loop_rows)
+            iterations += stats["iter_count"]
+            runs.append((f, new, stats, g, cold.last_multipliers))
+            if (_converged(stats) and (best is None or f < best[0])
+                    and _stable(problem, new)):
+                best = (f, new, stats, g, cold.last_multipliers)
+        full = cold
+    if best is None:
+        feasible = [r for r in runs[n_starts:] if _converged(r[2])]
+        if feasible:
+            raise RequirementsNotMetError(
+                f"the requirements cannot be met within the bounds: the binding constraint is "
+                f"closed-loop stability (the optima of all {len(feasible)} starts that meet "
+                "the frequency constraints have an unstable loop); relax the Ms limits, "
+                "narrow the bounds towards the initial design or add starts")
+        f, new, stats, g, _ = min(runs[n_starts:],
+                                  key=lambda r: max(cold.violations(r[3]).values()))
+        viol = cold.violations(g)
         worst = max(viol, key=viol.get)
         raise RequirementsNotMetError(
             f"the requirements cannot be met within the bounds: the binding constraint is "
             f"'{worst}' (violated by {viol[worst]:.3g} in scaled units at the best of "
-            f"{len(designs)} starts; IPOPT: {stats['return_status']}); relax it or widen the "
+            f"{n_starts} starts; IPOPT: {stats['return_status']}); relax it or widen the "
             "bounds of the free variables")
+    solver = full
 
     design = best[1]
     models = {"fine_band": ResponseModel(problem, _grid(*req.band, 6000)),
               "fine_loop": ResponseModel(problem, _grid(*req.loop_band, 6000))}
+    models["band"], models["loop"] = band_model, loop_model
     rounds, worst_rel, exchange_failed = 0, math.inf, False
     for rounds in range(1, max_exchange + 1):  # noqa: B007
-        models["band"] = ResponseModel(problem, band_grid)
-        models["loop"] = ResponseModel(problem, loop_grid)
         added_band, added_loop, worst_rel = _exchange_points(problem, design, models)
         if worst_rel <= tolerance:
             break
+        old_band, old_loop = band_grid, loop_grid
         band_grid = np.unique(np.concatenate([band_grid, added_band]))
         loop_grid = np.unique(np.concatenate([loop_grid, added_loop]))
-        solver = _Solver(problem, band_grid, loop_grid, h0, s0)
-        # the new grid points may cut off the current design; re-solve from it, shrinking a
-        # trust region until the step stays on the stable side (frequency constraints alone
-        # cannot tell a stable design from an unstable one far away)
+        lam_x, lam_g = best[4]
+        solver = _Solver(problem, kernels, band_grid.size, loop_grid.size, warm=True)
+        multipliers = (lam_x, _moved_multipliers(solver, lam_g, (old_band, band_grid),
+                                                 (old_loop, loop_grid)))
+        models["band"] = ResponseModel(problem, band_grid)
+        models["loop"] = ResponseModel(problem, loop_grid)
+        band_rows, loop_rows = models["band"].data.rows(), models["loop"].data.rows()
+        # the new grid points may cut off the current design; re-solve from it (warm: the
+        # multipliers of the old grid points carry over, the new points start at zero),
+        # shrinking a trust region until the step stays on the stable side (frequency
+        # constraints alone cannot tell a stable design from an unstable one far away)
         accepted = False
         for region in (None, 0.5, 0.1, 0.02):
-            new, _, _, f, stats, g = solver.solve(design, 1.0, 1.0, region)
+            new, _, _, f, stats, g = solver.solve(design, band_rows, loop_rows, region,
+                                                  multipliers=multipliers)
             iterations += stats["iter_count"]
             if _converged(stats) and _stable(problem, new):
-                design, best, accepted = new, (f, new, stats, g), True
+                design, accepted = new, True
+                best = (f, new, stats, g, solver.last_multipliers)
                 break
         if not accepted:
             exchange_failed = True
@@ -452,7 +672,8 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     return TuningResult(
         problem=problem, initial=x0, design=design, before=before, after=after,
         predicted=pred, success=not reasons, reasons=tuple(reasons), active=tuple(active),
-        stats={"starts": len(designs), "iterations": int(iterations), "exchange_rounds": rounds,
+        stats={"starts": n_starts, "polished": polished, "iterations": int(iterations),
+               "exchange_rounds": rounds,
                "grid_points": int(band_grid.size + loop_grid.size),
                "return_status": best[2]["return_status"],
                "time_s": time.perf_counter() - t_start})

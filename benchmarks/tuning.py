@@ -1,0 +1,436 @@
+"""Tuning the bundled axis: casadi/IPOPT against scipy on the same objective and constraints.
+
+Case: ``models/paper_x_axis`` with C, Kv, Kp and Ti free (``servotune.design.tuning_problem``
+with its defaults): objective = peak work-piece compliance over the band / its initial value
++ ``tracking_weight`` Kv0/Kv; constraints = Ms of the velocity and of the position loop below
+the axis requirements (``Requirements.ms_limit``, which folds in the phase and gain margins),
+closed-loop stability, bounds. All methods work in the same log-scaled variables
+``u = log(x / x0)`` within the same bounds.
+
+* ``casadi``: :func:`servotune.tuning.tune` as shipped (IPOPT, exact derivatives, grid exchange,
+  several starts; its time includes its own python-control verification of the initial and the
+  final design).
+* ``scipy_de``: ``scipy.optimize.differential_evolution`` with
+  ``constraints=NonlinearConstraint(...)`` (Lampinen's feasibility rules: no penalty weight),
+  default polish (trust-constr).
+* ``scipy_nm``: ``scipy.optimize.minimize(method="Nelder-Mead")`` with bounds, from the same
+  starting points as casadi (the initial design plus the same seeded stable draws), restarted
+  from its own result until it stops improving; constraints by an exact (L1) penalty
+  ``f + rho * sum(max(0, 1 - g_i))`` with rho = 10 (large enough: the penalised optimum is
+  the constrained one the other methods find), unstable designs get +inf.
+
+The scipy objective evaluates :class:`servotune.tuning.ResponseModel` (the same port-coupled
+responses as casadi, numerically) on ONE fixed log grid over the loop band (``--grid`` points;
+the compliance is taken on its part inside the objective band), so a design costs one call.
+Stability, which casadi keeps by continuity from stable starts and checks by the poles of the
+python-control plant, is checked here on every design by the eigenvalues of the closed-loop
+state matrix: that matrix is multi-affine in the design,
+``A = A0 + c A1 + Kv A2 + Kp A3 + Kp/Ti A4 + Kp Kv A5``; the six matrices are fitted from
+``build_plant`` at random designs and the fit is checked at two others (it is exact to
+round-off), so the check costs one 85 x 85 eigenvalue problem instead of an interconnection.
+
+Every final design is judged by ONE common evaluator: :func:`servotune.tuning.verify`
+(python-control on dense grids none of the methods used) plus the objective formula, with the
+constraint violations ``Ms - limit`` of both loops.
+
+Speedup at equal objective: each method records when its best feasible design on its own grid
+improves; the time scipy needs to reach casadi's objective (casadi's design evaluated on
+scipy's grid by the same formula, within ``--match`` relative) is compared with the time of
+the whole casadi run. A scipy method that never gets there within its budget gives a lower
+bound (budget / casadi time), reported as such.
+
+BLAS and OpenMP are held to one thread for all methods (the matrices are small).
+
+Usage: ``python benchmarks/tuning.py [--json] [--de-budget S] [--nm-budget S] [--grid N]``
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import casadi  # noqa: E402
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+from scipy.optimize import NonlinearConstraint, differential_evolution, minimize  # noqa: E402
+
+from servotune.axis import load_axis  # noqa: E402
+from servotune.design import tuning_problem  # noqa: E402
+from servotune.plant import Contact, UnstableLoopError, build_plant  # noqa: E402
+from servotune.tuning import Design, ResponseModel, tune, verify  # noqa: E402
+from servotune.tuning import solve as tuning_solve  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+RHO = 10.0
+
+
+class ClosedLoopMatrix:
+    """Closed-loop state matrix A(design) = sum_k m_k(design) A_k (multi-affine, fitted)."""
+
+    @staticmethod
+    def monomials(d: Design) -> np.ndarray:
+        return np.array([1.0, d.c, d.kv, d.kp, d.kp / d.ti, d.kp * d.kv])
+
+    def __init__(self, problem, rng):
+        if problem.contact_stiffness:
+            raise ValueError("the benchmark assumes purely viscous pads")
+        self.problem = problem
+
+        def draw():
+            return replace(problem.initial_design(), **{
+                v: float(math.exp(rng.uniform(*np.log(problem.bounds[v])))) for v in problem.free})
+
+        fit = [problem.initial_design()] + [draw() for _ in range(9)]
+        m = np.array([self.monomials(d) for d in fit])
+        a = np.array([self._exact(d).ravel() for d in fit])
+        coef, *_ = np.linalg.lstsq(m, a, rcond=None)
+        self.n = math.isqrt(a.shape[1])
+        self.coef = coef
+        self.fit_error = max(
+            float(np.abs(self(d) - self._exact(d)).max() / np.abs(self._exact(d)).max())
+            for d in (draw(), draw()))
+        if not self.fit_error < 1e-10:
+            raise RuntimeError(f"A(design) is not multi-affine here (fit error "
+                               f"{self.fit_error:.2g})")
+
+    def _exact(self, d: Design) -> np.ndarray:
+        p = self.problem
+        return build_plant(p.structure, p.drive_for(d), Contact.viscous(d.c), p.pads).A
+
+    def __call__(self, d: Design) -> np.ndarray:
+        return (self.monomials(d) @ self.coef).reshape(self.n, self.n)
+
+    def stable(self, d: Design) -> bool:
+        return bool(np.linalg.eigvals(self(d)).real.max() < 0)
+
+
+class GridObjective:
+    """The tuning objective and constraints of a problem on one fixed grid (numpy)."""
+
+    def __init__(self, problem, n_grid: int, closed_loop: ClosedLoopMatrix):
+        req = problem.requirements
+        lo, hi = min(req.band[0], req.loop_band[0]), max(req.band[1], req.loop_band[1])
+        self.problem = problem
+        self.model = ResponseModel(problem, np.geomspace(lo, hi, n_grid))
+        w = self.model.omega
+        self.in_band = (w >= req.band[0]) & (w <= req.band[1])
+        self.in_loop = (w >= req.loop_band[0]) & (w <= req.loop_band[1])
+        self.x0 = problem.initial_design()
+        self.free = problem.free
+        self.lower = np.array([math.log(problem.bounds[v][0] / getattr(self.x0, v))
+                               for v in self.free])
+        self.upper = np.array([math.log(problem.bounds[v][1] / getattr(self.x0, v))
+                               for v in self.free])
+        self.ms = [req.ms_limit("velocity"), req.ms_limit("position")]
+        self.kv_min = req.kv_min if "kv" in self.free else 0.0
+        self.closed_loop = closed_loop
+        self.mu = problem.chatter.mu if problem.chatter is not None else 1.0
+        h = self.model(self.x0)["compliance"][self.in_band]
+        self.h0 = float(np.abs(h).max())
+        self.r0 = float((self.mu * h.real).min())
+        self._cache = {}
+        self.evaluations = 0
+        self.t0 = time.perf_counter()
+        self.history = []  # (elapsed s, best feasible objective so far)
+
+    def design(self, u) -> Design:
+        return replace(self.x0, **{v: float(getattr(self.x0, v) * math.exp(u[i]))
+                                   for i, v in enumerate(self.free)})
+
+    def u_of(self, d: Design) -> np.ndarray:
+        return np.array([math.log(getattr(d, v) / getattr(self.x0, v)) for v in self.free])
+
+    def values(self, u):
+        """(objective, constraint values g (feasible when all >= 1), stable)."""
+        key = tuple(float(x) for x in u)
+        if key in self._cache:
+            return self._cache[key]
+        self.evaluations += 1
+        d = self.design(u)
+        res = self.model(d)
+        h = res["compliance"][self.in_band]
+        w_peak, w_chatter = self.problem.weights
+        f = w_peak * float(np.abs(h).max()) / self.h0
+        if w_chatter:
+            f += w_chatter * float((self.mu * h.real).min()) / self.r0
+        if "kv" in self.free:
+            f += self.problem.tracking_weight * self.x0.kv / d.kv
+        g = []
+        if self.problem.drive is not None:
+            for limit, key_loop in zip(self.ms, ("loop_velocity", "loop_position"), strict=True):
+                g.append(limit * float(np.abs(1.0 + res[key_loop][self.in_loop]).min()))
+        if self.kv_min > 0:
+            g.append(d.kv / self.kv_min)
+        stable = self.closed_loop.stable(d)
+        out = (f, np.array(g), stable)
+        if len(self._cache) > 64:
+            self._cache.clear()
+        self._cache[key] = out
+        if stable and np.all(out[1] >= 1.0) and (not self.history or f < self.history[-1][1]):
+            self.history.append((time.perf_counter() - self.t0, f))
+        return out
+
+    def restart_clock(self):
+        self.t0 = time.perf_counter()
+        self.history = []
+        self.evaluations = 0
+
+    def time_to_reach(self, target: float, rtol: float) -> float | None:
+        for t, f in self.history:
+            if f <= target * (1.0 + rtol):
+                return t
+        return None
+
+    # scipy interfaces ------------------------------------------------------------------
+    def objective(self, u) -> float:
+        return self.values(u)[0]
+
+    def constraints(self, u) -> np.ndarray:
+        _, g, stable = self.values(u)
+        return np.append(g, 1.0 if stable else -1.0)
+
+    def penalised(self, u) -> float:
+        f, g, stable = self.values(u)
+        if not stable:
+            return math.inf
+        return f + RHO * float(np.maximum(0.0, 1.0 - g).sum())
+
+
+def common_evaluation(problem, before, design: Design) -> dict:
+    """The independent evaluator: python-control verification plus the objective formula."""
+    req = problem.requirements
+    try:
+        perf = verify(problem, design)
+    except UnstableLoopError as exc:
+        return {"design": design.to_dict(), "stable": False, "reason": str(exc)}
+    w_peak, w_chatter = problem.weights
+    x0 = problem.initial_design()
+    value = w_peak * perf.peak_compliance / before.peak_compliance
+    if w_chatter:
+        value += w_chatter * before.b_crit / perf.b_crit
+    if "kv" in problem.free:
+        value += problem.tracking_weight * x0.kv / design.kv
+    out = {"design": design.to_dict(), "stable": True, "objective": value,
+           "peak_compliance": perf.peak_compliance,
+           "peak_frequency_hz": perf.peak_frequency / (2 * math.pi)}
+    if perf.velocity is not None:
+        out.update(ms_velocity=perf.velocity.ms, ms_position=perf.position.ms,
+                   ms_velocity_violation=perf.velocity.ms - req.ms_limit("velocity"),
+                   ms_position_violation=perf.position.ms - req.ms_limit("position"))
+        out["feasible"] = (out["ms_velocity_violation"] <= 1e-3 * req.ms_limit("velocity")
+                           and out["ms_position_violation"] <= 1e-3 * req.ms_limit("position"))
+    else:
+        out["feasible"] = True
+    return out
+
+
+def start_points(problem, closed_loop: ClosedLoopMatrix, starts: int, seed: int):
+    """The starting points of :func:`servotune.tuning.tune`: the initial design and seeded
+    log-uniform draws within the bounds, unstable draws skipped (same sequence)."""
+    x0 = problem.initial_design()
+    rng = np.random.default_rng(seed)
+    designs, draws = [x0], 0
+    while len(designs) < max(starts, 1) and draws < 20 * starts:
+        draws += 1
+        values = {v: float(math.exp(rng.uniform(*np.log(problem.bounds[v]))))
+                  for v in problem.free}
+        candidate = replace(x0, **values)
+        if closed_loop.stable(candidate):
+            designs.append(candidate)
+    return designs
+
+
+def run_de(grid: GridObjective, budget: float, seed: int, popsize: int):
+    grid.restart_clock()
+    state = {"stopped": False}
+
+    def callback(intermediate_result):
+        if time.perf_counter() - grid.t0 > budget:
+            state["stopped"] = True
+            return True
+        return False
+
+    n_g = len(grid.constraints(np.zeros(len(grid.free))))
+    res = differential_evolution(
+        grid.objective, list(zip(grid.lower, grid.upper, strict=True)),
+        constraints=NonlinearConstraint(grid.constraints, np.ones(n_g), np.full(n_g, np.inf)),
+        seed=seed, popsize=popsize, maxiter=100000, tol=1e-8, atol=0.0, polish=True,
+        callback=callback)
+    return res.x, time.perf_counter() - grid.t0, {
+        "message": str(res.message), "generations": int(res.nit), "evaluations": grid.evaluations,
+        "stopped_by_budget": state["stopped"], "polish": "trust-constr (scipy default)"}
+
+
+def run_nm(grid: GridObjective, starts, budget: float):
+    grid.restart_clock()
+    best, restarts = None, 0
+    bounds = list(zip(grid.lower, grid.upper, strict=True))
+    for d in starts:
+        u = grid.u_of(d)
+        f = grid.penalised(u)
+        for _ in range(20):
+            if time.perf_counter() - grid.t0 > budget:
+                break
+            res = minimize(grid.penalised, u, method="Nelder-Mead", bounds=bounds,
+                           options={"xatol": 1e-9, "fatol": 1e-12, "maxfev": 20000,
+                                    "adaptive": True})
+            restarts += 1
+            improved = res.fun < f - 1e-12
+            u, f = res.x, min(f, res.fun)
+            if not improved:
+                break
+        if best is None or f < best[1]:
+            best = (u, f)
+    return best[0], time.perf_counter() - grid.t0, {
+        "evaluations": grid.evaluations, "nelder_mead_runs": restarts,
+        "penalty": f"exact L1, rho = {RHO}", "stopped_by_budget":
+            time.perf_counter() - grid.t0 > budget}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--axis", default=str(ROOT / "models" / "paper_x_axis"))
+    parser.add_argument("--starts", type=int, default=4, help="casadi and Nelder-Mead starts")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--grid", type=int, default=3000, help="scipy grid points")
+    parser.add_argument("--de-budget", type=float, default=600.0, help="DE time budget [s]")
+    parser.add_argument("--nm-budget", type=float, default=300.0, help="NM time budget [s]")
+    parser.add_argument("--popsize", type=int, default=15)
+    parser.add_argument("--match", type=float, default=1e-4,
+                        help="relative tolerance of 'equal objective'")
+    parser.add_argument("--methods", default="de,nm")
+    args = parser.parse_args(argv)
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+
+    load_start = os.getloadavg()[0]
+    axis = load_axis(args.axis)
+    settings = axis.tuning  # as `servotune tune` sets the problem up (tune_axis)
+    problem = tuning_problem(axis, settings.free, settings.chatter_weight, settings.bounds)
+
+    # casadi ---------------------------------------------------------------------------
+    # the time tune() spends in its own python-control verification (initial and final
+    # design) is measured by wrapping the module's verify
+    spent = {"verify_s": 0.0}
+
+    def timed_verify(*a):
+        t = time.perf_counter()
+        try:
+            return verify(*a)
+        finally:
+            spent["verify_s"] += time.perf_counter() - t
+
+    tuning_solve.verify = timed_verify
+    try:
+        t0, c0 = time.perf_counter(), time.process_time()
+        result = tune(problem, starts=args.starts, seed=args.seed)
+        t_casadi, cpu_casadi = time.perf_counter() - t0, time.process_time() - c0
+    finally:
+        tuning_solve.verify = verify
+    t0 = time.perf_counter()
+    before = verify(problem, problem.initial_design())
+    t_verify = time.perf_counter() - t0
+
+    # scipy ----------------------------------------------------------------------------
+    t0 = time.perf_counter()
+    closed_loop = ClosedLoopMatrix(problem, np.random.default_rng(12345))
+    grid = GridObjective(problem, args.grid, closed_loop)
+    t_setup = time.perf_counter() - t0
+    casadi_on_grid = grid.values(grid.u_of(result.design))
+    target = casadi_on_grid[0]
+
+    evaluations = {"casadi": common_evaluation(problem, before, result.design)}
+    evaluations["casadi"].update(time_s=t_casadi, cpu_s=cpu_casadi,
+                                 time_in_own_verification_s=spent["verify_s"],
+                                 time_optimisation_s=t_casadi - spent["verify_s"],
+                                 success=result.success,
+                                 reasons=list(result.reasons), stats=result.stats,
+                                 objective_on_scipy_grid=target,
+                                 feasible_on_scipy_grid=bool(casadi_on_grid[2] and np.all(
+                                     casadi_on_grid[1] >= 1 - 1e-9)))
+    runs = {}
+    if "de" in methods:
+        c0 = time.process_time()
+        u, t, info = run_de(grid, args.de_budget, args.seed, args.popsize)
+        runs["scipy_de"] = (u, t, time.process_time() - c0, info, list(grid.history))
+    if "nm" in methods:
+        c0 = time.process_time()
+        starts = start_points(problem, closed_loop, args.starts, args.seed)
+        u, t, info = run_nm(grid, starts, args.nm_budget)
+        runs["scipy_nm"] = (u, t, time.process_time() - c0, info, list(grid.history))
+    for name, (u, t, cpu, info, history) in runs.items():
+        f, g, stable = grid.values(u)
+        grid.history = history
+        reach = {f"time_to_casadi_objective_rtol_{r:g}_s": grid.time_to_reach(target, r)
+                 for r in sorted({args.match, 1e-2, 1e-3})}
+        ev = common_evaluation(problem, before, grid.design(u))
+        ev.update(time_s=t, cpu_s=cpu, setup_s=t_setup, objective_on_scipy_grid=f,
+                  feasible_on_scipy_grid=bool(stable and np.all(g >= 1 - 1e-9)), **info, **reach)
+        t_equal = grid.time_to_reach(target, args.match)
+        ev["speedup"] = (t_equal / t_casadi) if t_equal is not None else None
+        ev["speedup_lower_bound"] = None if t_equal is not None else t / t_casadi
+        t_opt = t_casadi - spent["verify_s"]
+        ev["speedup_optimisation_only"] = (t_equal / t_opt) if t_equal is not None else None
+        ev["speedup_optimisation_only_lower_bound"] = None if t_equal is not None else t / t_opt
+        ev["best_feasible_history"] = [[round(a, 3), b] for a, b in history]
+        evaluations[name] = ev
+
+    speedups = [ev["speedup"] or ev["speedup_lower_bound"]
+                for k, ev in evaluations.items() if k != "casadi"]
+    out = {
+        "case": f"{axis.name}: free {','.join(problem.free)}, objective peak/peak0 + "
+                f"{problem.tracking_weight} Kv0/Kv, Ms velocity <= "
+                f"{problem.requirements.ms_limit('velocity'):.4f}, Ms position <= "
+                f"{problem.requirements.ms_limit('position'):.4f}, stable",
+        "time_casadi_s": t_casadi,
+        "time_one_verification_s": t_verify,
+        "scipy_grid_points": args.grid,
+        "match_rtol": args.match,
+        "closed_loop_fit_error": closed_loop.fit_error,
+        "speedup": min(speedups) if speedups else None,
+        "speedup_is_lower_bound": any(ev.get("speedup") is None
+                                      for k, ev in evaluations.items() if k != "casadi"),
+        "methods": evaluations,
+        "load_average_1min": [load_start, os.getloadavg()[0]],
+        "versions": {"scipy": scipy.__version__, "casadi": casadi.__version__,
+                     "numpy": np.__version__},
+    }
+    if args.json:
+        print(json.dumps(out, indent=2, default=float))
+    else:
+        print(out["case"])
+        print(f"{'method':10} {'time [s]':>9} {'objective':>11} {'Ms vel':>7} {'Ms pos':>7} "
+              f"{'feasible':>8}  design (c, kv, kp, ti)")
+        for name, ev in evaluations.items():
+            d = ev["design"]
+            print(f"{name:10} {ev['time_s']:9.2f} {ev.get('objective', math.nan):11.7f} "
+                  f"{ev.get('ms_velocity', math.nan):7.4f} {ev.get('ms_position', math.nan):7.4f}"
+                  f" {ev.get('feasible', False)!s:>8}  {d['c']:.4g}, {d['kv']:.4g}, "
+                  f"{d['kp']:.4g}, {d['ti']:.4g}")
+        for name, ev in evaluations.items():
+            if name == "casadi":
+                continue
+            t_eq = ev[f"time_to_casadi_objective_rtol_{args.match:g}_s"]
+            if t_eq is not None:
+                print(f"  {name}: reaches casadi's objective (rtol {args.match:g}) after "
+                      f"{t_eq:.1f} s: speedup {ev['speedup']:.1f} x")
+            else:
+                print(f"  {name}: does not reach casadi's objective (rtol {args.match:g}) "
+                      f"within {ev['time_s']:.0f} s: speedup > {ev['speedup_lower_bound']:.1f} x")
+        print(f"  casadi: {t_casadi:.2f} s in all, of which {spent['verify_s']:.2f} s in its "
+              f"own python-control verification (2 designs); load average {load_start:.1f} -> "
+              f"{os.getloadavg()[0]:.1f}")
+    return out
+
+
+if __name__ == "__main__":
+    main()
