@@ -103,26 +103,24 @@ def fast_frequency_response(sys: control.StateSpace, omega, inputs=None, outputs
         a, t = scipy.linalg.matrix_balance(a, permute=False, separate=True)
         t = t[0]
         b, c = b / t[:, None], c * t[None, :]
-        lam, v = np.linalg.eig(a)
-        try:
-            wb = np.linalg.solve(v, b)
-        except np.linalg.LinAlgError:
-            wb = None
-        if wb is not None and np.all(np.isfinite(wb)):
-            # residues R_i = (C v_i)(w_i^T B), summed against 1/(s - lambda_i) in one product
-            residues = ((c @ v)[:, None, :] * wb.T[None, :, :]).reshape(-1, lam.size)
-            resp = (residues @ (1.0 / (s[None, :] - lam[:, None]))).reshape(
-                c.shape[0], b.shape[1], s.size)
+        eye = np.eye(a.shape[0])
+        check = None
+        for attempt in (_modal_response, _deflated_modal_response):
+            resp = attempt(a, b, c, s)
+            if resp is None:
+                continue
             # a posteriori check against direct solves where the response is largest (next to
             # the least damped poles) and at a spread of frequencies
-            mag = np.abs(resp).reshape(-1, s.size).max(axis=0)
-            check = np.unique(np.concatenate([np.argsort(mag)[-4:],
-                                              np.linspace(0, s.size - 1, 6).astype(int)]))
-            eye = np.eye(a.shape[0])
-            exact = np.moveaxis(c @ np.linalg.solve(s[check, None, None] * eye - a, b), 0, -1)
+            if check is None:
+                mag = np.abs(resp).reshape(-1, s.size).max(axis=0)
+                check = np.unique(np.concatenate([np.argsort(mag)[-4:],
+                                                  np.linspace(0, s.size - 1, 6).astype(int)]))
+                exact = np.moveaxis(c @ np.linalg.solve(s[check, None, None] * eye - a, b),
+                                    0, -1)
             err = np.abs(resp[:, :, check] - exact).max() / max(np.abs(exact).max(), 1e-300)
-            if not err <= rtol:
-                resp = None
+            if err <= rtol:
+                break
+            resp = None
         if resp is None:
             h, q = scipy.linalg.hessenberg(a, calc_q=True)
             resp = _hessenberg_response(h, q.T @ b, c @ q, s)
@@ -131,6 +129,48 @@ def fast_frequency_response(sys: control.StateSpace, omega, inputs=None, outputs
     resp = resp + d[:, :, None]
     return control.frd(resp, omega, inputs=[sys.input_labels[i] for i in i_in],
                        outputs=[sys.output_labels[i] for i in i_out])
+
+
+def _modal_response(a, b, c, s):
+    """C (sI - A)^-1 B from the eigenvectors of A: residues (C v_i)(w_i^T B) summed against
+    1/(s - lambda_i) in one matrix product; None if V is singular."""
+    lam, v = np.linalg.eig(a)
+    try:
+        wb = np.linalg.solve(v, b)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.all(np.isfinite(wb)):
+        return None
+    residues = ((c @ v)[:, None, :] * wb.T[None, :, :]).reshape(-1, lam.size)
+    return (residues @ (1.0 / (s[None, :] - lam[:, None]))).reshape(
+        c.shape[0], b.shape[1], s.size)
+
+
+def _deflated_modal_response(a, b, c, s):
+    """The modal form with the eigenvalues near zero split off first.
+
+    Integrators and rigid-body modes often form a defective (Jordan) block at s = 0, which
+    makes the eigenvectors of A useless. An ordered Schur form puts those eigenvalues first,
+    a Sylvester equation decouples them (A ~ diag(T11, T22)), and the small T11 block is
+    solved directly at each frequency while T22 goes through the modal form.
+    """
+    scale = max(float(np.abs(a).max()), 1e-300)
+    tol = 1e-6 * scale
+    t, z, k = scipy.linalg.schur(a.astype(complex), output="complex",
+                                 sort=lambda x: abs(x) < tol)
+    if k == 0 or k == a.shape[0]:
+        return None
+    t11, t12, t22 = t[:k, :k], t[:k, k:], t[k:, k:]
+    x = scipy.linalg.solve_sylvester(t11, -t22, -t12)
+    cz, zb = c @ z, z.conj().T @ b
+    c1, c2 = cz[:, :k], cz[:, :k] @ x + cz[:, k:]
+    b1, b2 = zb[:k] - x @ zb[k:], zb[k:]
+    tail = _modal_response(t22, b2, c2, s)
+    if tail is None:
+        return None
+    head = np.linalg.solve(s[:, None, None] * np.eye(k) - t11,
+                           np.broadcast_to(b1, (s.size, *b1.shape)))
+    return tail + np.moveaxis(c1 @ head, 0, -1)
 
 
 def _hessenberg_response(h, qb, cq, s) -> np.ndarray:
@@ -381,7 +421,9 @@ def analyse_loop(loop: control.StateSpace, omega=None) -> LoopAnalysis:
     closed = control.feedback(loop, 1.0)
     require_stable(closed, what="closed loop")
     omega = (2 * math.pi * np.geomspace(0.1, 1e4, 4000) if omega is None else _omega(omega))
-    l_jw = fast_frequency_response(loop, omega).complex.reshape(-1)
+    # margins and Ms need far less than the default 1e-10 (and the modal form then rarely falls
+    # back to the slow per-frequency solves)
+    l_jw = fast_frequency_response(loop, omega, rtol=1e-7).complex.reshape(-1)
     sens = 1.0 / (1.0 + l_jw)
     ms, w_ms = peak(omega, sens)
     t = np.abs(l_jw / (1.0 + l_jw))

@@ -101,3 +101,23 @@ def test_peak_refinement_finds_a_resonance_between_grid_points():
     assert where == pytest.approx(exact_w, rel=1e-9)
     assert value == pytest.approx(exact, rel=1e-9)
     assert np.abs(h).max() < 0.995 * exact  # the grid alone misses it
+
+
+def test_fast_response_deflates_a_jordan_block_at_zero():
+    # a double integrator (a Jordan block at s = 0, as a rigid body under an open loop) in
+    # series with a lightly damped mode: the eigenvectors are useless, the deflated modal form
+    # is exact
+    wn, zeta = 300.0, 0.02
+    sys = control.ss(control.tf([1.0], [1.0, 0.0, 0.0]) *
+                     control.tf([wn**2], [1.0, 2 * zeta * wn, wn**2]))
+    omega = np.geomspace(0.1, 3e3, 2000)
+    s = 1j * omega
+    exact = wn**2 / (s**2 * (s**2 + 2 * zeta * wn * s + wn**2))
+    assert_allclose(fast_frequency_response(sys, omega).complex.ravel(), exact, rtol=1e-9)
+    from servotune.frequency import _deflated_modal_response, _modal_response
+
+    deflated = _deflated_modal_response(sys.A, sys.B, sys.C, s)
+    assert deflated is not None
+    assert_allclose(deflated.ravel(), exact, rtol=1e-9)
+    plain = _modal_response(sys.A, sys.B, sys.C, s)
+    assert plain is None or not np.allclose(plain.ravel(), exact, rtol=1e-9)
