@@ -55,7 +55,13 @@ K. J. Astrom, R. M. Murray, Feedback Systems, 2nd ed. (2021), sec 13.3 (Ms and m
 
 from ..requirements import Requirements
 from .ports import ResponseModel, evaluate
-from .problem import ChatterTarget, Design, RequirementsNotMetError, TuningProblem
+from .problem import (
+    ChatterTarget,
+    Design,
+    RequirementsNotMetError,
+    TuningDidNotConvergeError,
+    TuningProblem,
+)
 from .solve import Performance, TuningResult, tune, verify
 
 __all__ = [
@@ -64,6 +70,7 @@ __all__ = [
     "Performance",
     "Requirements",
     "RequirementsNotMetError",
+    "TuningDidNotConvergeError",
     "ResponseModel",
     "TuningProblem",
     "TuningResult",

@@ -9,7 +9,8 @@ from ..drive import Drive, PIController
 from ..requirements import Requirements
 from ..structure.model import ModalModel
 
-__all__ = ["VARIABLES", "ChatterTarget", "Design", "RequirementsNotMetError", "TuningProblem"]
+__all__ = ["VARIABLES", "ChatterTarget", "Design", "RequirementsNotMetError",
+           "TuningDidNotConvergeError", "TuningProblem"]
 
 VARIABLES = ("c", "kv", "kp", "ti")
 HZ = 1.0 / (2.0 * math.pi)
@@ -17,6 +18,11 @@ HZ = 1.0 / (2.0 * math.pi)
 
 class RequirementsNotMetError(ValueError):
     """The requirements cannot be met within the bounds (names the binding constraint)."""
+
+
+class TuningDidNotConvergeError(RuntimeError):
+    """The optimiser stopped without a usable design while the requirements themselves were
+    met (e.g. the iteration limit): more starts or narrower bounds are the remedy."""
 
 
 @dataclass(frozen=True)
