@@ -1,5 +1,6 @@
 """Every example runs, and its key numbers are checked against their references."""
 
+import dataclasses
 import importlib.util
 import math
 from concurrent.futures import ThreadPoolExecutor
@@ -216,7 +217,8 @@ def test_tune_axis_from_matrix_market(generate):
     peaks = {}
     for key in ("initial_design", "design"):
         d = r[key]
-        drive = analysis.with_design(axis.drive, d["kv"], d["kp"], d["ti"])
+        drive = dataclasses.replace(axis.drive, kv=d["kv"],
+                                    velocity_loop=st.PIController(d["kp"], d["ti"]))
         plant = build_plant(axis.structure, drive, Contact.viscous(d["c"]), axis.pads)
         h = control.frequency_response(plant[plant.output_labels.index("wp_x"),
                                              plant.input_labels.index("f_wp_x")], omega)
