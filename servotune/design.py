@@ -194,10 +194,10 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
     (its pair's term at resonance). The modes are chosen at the design's C (the ``keep``
     largest peaks below ``f_max_hz`` that reach ``significance`` times the largest) and
     followed outwards in C by the nearest pole; a mode that turns over-damped or jumps by more
-    than a quarter of its frequency ends its track (NaN).
+    than half its frequency ends its track (NaN). The design's C is added to the grid.
     """
-    c_values = np.asarray(c_values, dtype=float)
     chosen = float(c_chosen if c_chosen is not None else axis.friction.viscous)
+    c_values = np.unique(np.append(np.asarray(c_values, dtype=float), chosen))
     controlled = (drive or axis.drive) is not None
     poles, peaks = [], []
     for c in c_values:
@@ -221,7 +221,7 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
             while 0 <= j < c_values.size and poles[j].size:
                 dist = np.abs(poles[j] - current)
                 i = int(np.argmin(dist))
-                if dist[i] > 0.25 * abs(current):
+                if dist[i] > 0.5 * abs(current):
                     break
                 current = poles[j][i]
                 tracks_f[m, j], tracks_p[m, j] = abs(current), peaks[j][i]
@@ -378,7 +378,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         if "c" in problem.free:
             lo, hi = problem.bounds["c"]
             out["mode_peaks"] = mode_peaks_vs_damping(
-                axis, np.geomspace(lo, hi, 41), after_drive, result.design.c)
+                axis, np.geomspace(lo, hi, 61), after_drive, result.design.c)
         if simulate:
             out["nonlinear"] = nonlinear_check(axis, result.design, duration=sweep_duration,
                                                executor=executor)
