@@ -19,12 +19,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import time
 from pathlib import Path
 
 import control
 import numpy as np
 import scipy.linalg
+from _timing import best_time
 
 from servotune import analysis
 from servotune.axis import load_axis
@@ -32,14 +32,6 @@ from servotune.frequency import fast_frequency_response, port_compliance
 
 ROOT = Path(__file__).resolve().parents[1]
 
-
-def best_time(fn, repeat):
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
 
 
 def reference(sys, omega):

@@ -25,6 +25,7 @@ import math
 import time
 
 import numpy as np
+from _timing import best_time
 from scipy.integrate import solve_ivp
 
 from servotune.friction import BIANCHI2014, describing_function
@@ -92,14 +93,6 @@ def servotune_all(p, amplitudes, omega, n_steps):
     return ceq * math.pi * omega * amplitudes**2
 
 
-def best_time(fun, repeats):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fun()
-        times.append(time.perf_counter() - t0)
-    return min(times)
-
 
 def calibrate(fun, settings, reference):
     """The first setting (cheapest first) whose energies are within TOLERANCE of reference."""
@@ -132,12 +125,12 @@ def main(argv=None) -> dict:
     rtol_lsoda, err_lsoda = calibrate(lambda r: scipy_all(p, amplitudes, omega, "LSODA", r),
                                       rtols, reference)
 
-    t_st = best_time(lambda: servotune_all(p, amplitudes, omega, n_steps), 10 * args.repeats)
+    t_st = best_time(lambda: servotune_all(p, amplitudes, omega, n_steps), 10 * args.repeats)[0]
     t_radau = best_time(lambda: scipy_all(p, amplitudes, omega, "Radau", rtol_radau),
-                        args.repeats)
+                        args.repeats)[0]
     t_lsoda = best_time(lambda: scipy_all(p, amplitudes, omega, "LSODA", rtol_lsoda),
-                        args.repeats)
-    t_default = best_time(lambda: servotune_all(p, amplitudes, omega, 1024), 10 * args.repeats)
+                        args.repeats)[0]
+    t_default = best_time(lambda: servotune_all(p, amplitudes, omega, 1024), 10 * args.repeats)[0]
     baseline = min(t_radau, t_lsoda)
     result = {
         "task": "LuGre energy per cycle, Bianchi 2014 parameters, 20 amplitudes 0.2-50 um, 20 Hz",

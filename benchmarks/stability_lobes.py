@@ -37,6 +37,7 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 import scipy.linalg  # noqa: E402
+from _timing import best_time  # noqa: E402
 
 from servotune import chatter  # noqa: E402
 
@@ -48,14 +49,6 @@ SYSTEM = chatter.modal_compliance([chatter.Mode(WN, ZETA, 0.03993 * WN**2)])
 def setup(ae):
     return chatter.MillingSetup(teeth=2, kt=6e8, kn=2e8, radial_immersion=ae, milling="down")
 
-
-def best_time(fn, repeat):
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
 
 
 # --- baselines --------------------------------------------------------------------------------
