@@ -60,7 +60,8 @@ def evaluate_case(axis_path: str, params: dict, amplitudes: tuple, frequency_hz:
     grid_hz : (low, high, count)
         Log grid of the compliance peaks [Hz].
     """
-    axis = st.load_axis(axis_path)
+    # the paper's model: the drive in continuous time (its Table 3 calibration)
+    axis = st.load_axis(axis_path).with_continuous_drive()
     friction = GuideWayFriction(axis.pads, st.LuGreParameters(**params))
     omega = 2 * math.pi * np.geomspace(*grid_hz[:2], int(grid_hz[2]))
     w = 2 * math.pi * frequency_hz

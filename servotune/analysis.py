@@ -18,7 +18,7 @@ from . import frequency
 from .axis import Axis
 from .chatter import stability_lobes
 from .drive import Drive
-from .plant import Contact, build_plant, loop_transfer
+from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
 
 __all__ = [
     "axis_contact",
@@ -107,7 +107,16 @@ def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
     out = {}
     for loop in ("velocity", "position"):
         lt = loop_transfer(axis.structure, drive, contact, pads, loop)
-        out[loop] = (frequency.analyse_loop(lt, omega),
+        try:
+            analysed = frequency.analyse_loop(lt, omega)
+        except UnstableLoopError as exc:
+            if drive.sampling is not None and not drive.sampling.is_continuous:
+                raise UnstableLoopError(
+                    f"{exc}. The drive is sampled ([drive.sampling]): its delays cost phase "
+                    "that a continuous model does not show; tune the gains (servotune tune) "
+                    "or, for the paper's continuous model, pass --continuous") from None
+            raise
+        out[loop] = (analysed,
                      frequency.fast_frequency_response(lt, omega).complex.reshape(-1))
     return LoopReport(contact, omega, out["velocity"][0], out["position"][0],
                       out["velocity"][1], out["position"][1])

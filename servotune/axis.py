@@ -38,15 +38,18 @@ from types import MappingProxyType
 from .chatter.setup import MillingSetup
 from .drive import (
     Drive,
+    DriveLimits,
     LowPassFilter,
     Motor,
     NotchFilter,
     PIController,
+    Sampling,
     kv_from_m_per_min_per_mm,
 )
 from .friction.identify import fit_steady_state, read_friction_csv
 from .friction.lugre import LuGreParameters
 from .plant import GuideWayFriction
+from .regimes import Operation
 from .requirements import Requirements
 from .structure.io import MatrixFileError, read_structure
 from .structure.model import ModalModel, UnknownDofError
@@ -54,7 +57,8 @@ from .structure.reduction import craig_bampton
 
 __all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis"]
 
-SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "requirements", "tuning")
+SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "operation", "requirements",
+            "tuning")
 _STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce"}
 _REDUCE_KEYS = {"boundary", "n_modes", "f_max_hz"}
 
@@ -74,11 +78,17 @@ def _frozen(value):
 
 @dataclass(frozen=True)
 class Cutting:
-    """The milling set-up of an axis and the spindle-speed range of interest [rpm]."""
+    """The milling set-up of an axis, the spindle-speed range of interest [rpm] and the feed
+    per tooth [m]."""
 
     setup: MillingSetup
     speed_rpm: tuple[float, float] = (1000.0, 12000.0)
     direction: str = "x"
+    feed_per_tooth: float = 1e-4
+
+    def feed_speeds(self) -> tuple[float, float]:
+        """Slide speeds [m/s] at the two ends of the spindle-speed range: f_z N n / 60."""
+        return tuple(self.feed_per_tooth * self.setup.teeth * n / 60.0 for n in self.speed_rpm)
 
 
 @dataclass(frozen=True)
@@ -87,11 +97,14 @@ class TuningSettings:
 
     ``bounds`` maps ``c`` [N s/m], ``kv`` [1/s], ``kp`` [N m s/rad] and ``ti`` [s] to
     (low, high); absent ones take :data:`servotune.design.DEFAULT_BOUNDS`.
+    ``friction_spread`` maps fc, fs, sigma1 (fractions) and sigma0 (a factor) to the spread of
+    the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`).
     """
 
     free: tuple[str, ...] = ("c", "kv", "kp", "ti")
     bounds: Mapping = field(default_factory=lambda: MappingProxyType({}))
     chatter_weight: float = 0.0
+    friction_spread: Mapping = field(default_factory=lambda: MappingProxyType({}))
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,12 +121,17 @@ class Axis:
     friction : GuideWayFriction or None
     drive : Drive or None
     cutting : Cutting or None
+    operation : Operation or None
+        ``[operation]``: feed speeds, rapid speed, acceleration, process force (None without a
+        drive and friction, where there is nothing to operate).
     requirements : Requirements
         Defaults when the table is absent.
     tuning : TuningSettings
         ``[tuning]``; defaults when absent.
     tables : Mapping
         The raw TOML tables, read-only.
+    defaults : tuple of str
+        One line for each value that was not given and took a default (shown with results).
     """
 
     name: str
@@ -123,9 +141,11 @@ class Axis:
     friction: GuideWayFriction | None = None
     drive: Drive | None = None
     cutting: Cutting | None = None
+    operation: Operation | None = None
     requirements: Requirements = field(default_factory=Requirements)
     tuning: TuningSettings = field(default_factory=TuningSettings)
     tables: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    defaults: tuple[str, ...] = ()
 
     @property
     def file(self) -> Path:
@@ -166,6 +186,16 @@ class Axis:
             raise AxisFormatError(f"{self.file}: [cutting] is missing; add teeth, kt, kn, "
                                   "radial_immersion, milling and speed_rpm (see `servotune init`)")
         return self.cutting
+
+    def with_continuous_drive(self) -> Axis:
+        """The axis with its drive in continuous time (no sampling, no delays): the paper's
+        model (sec 3: "continuous time elements"), for reproducing its results."""
+        import dataclasses
+
+        if self.drive is None:
+            return self
+        return dataclasses.replace(
+            self, drive=dataclasses.replace(self.drive, sampling=Sampling.continuous()))
 
     def configuration(self, pads: str = "free", motor: str = "free") -> ModalModel:
         """The structure with the guide-way pads and/or the motor rotor held (``"locked"``)
@@ -259,15 +289,30 @@ def _table(data, name, file, required=(), optional=()):
     return table
 
 
-def _number(table, key, file, section, default=None, positive=True):
+def _number(table, key, file, section, default=None, positive=True, low=None, high=None,
+            unit="SI units"):
+    """A number of a table: the default when absent; positive unless told otherwise; within
+    [low, high] when given (a plausibility range that catches unit slips)."""
     value = table.get(key, default)
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _err(file, f"[{section}] {key}", f"got {value!r}", "give a number in SI units")
+        raise _err(file, f"[{section}] {key}", f"got {value!r}", f"give a number in {unit}")
+    if not math.isfinite(value):
+        raise _err(file, f"[{section}] {key}", f"got {value!r}", "give a finite number")
     if positive and not value > 0:
         raise _err(file, f"[{section}] {key}", f"got {value!r}", "give a positive value")
+    if (low is not None and value < low) or (high is not None and value > high):
+        raise _err(file, f"[{section}] {key}", f"{value!r} is outside the plausible range "
+                   f"[{low:g}, {high:g}] {unit}", "check the value and its unit")
     return float(value)
+
+
+def _bool(table, key, file, section, default):
+    value = table.get(key, default)
+    if not isinstance(value, bool):
+        raise _err(file, f"[{section}] {key}", f"got {value!r}", "give true or false")
+    return value
 
 
 def _friction(data, structure, folder, file) -> GuideWayFriction | None:
@@ -316,14 +361,15 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
 _MOTOR_KEYS = ("torque_constant", "back_emf_constant", "resistance", "inductance")
 
 
-def _drive(data, structure, file) -> Drive | None:
+def _drive(data, structure, file, defaults) -> Drive | None:
     table = _table(data, "drive", file, ("motor", "transmission", "current_loop",
                                          "velocity_loop", "position_loop"),
-                   ("encoder", "feedforward", "filters"))
+                   ("encoder", "feedforward", "filters", "sampling"))
     if table is None:
         return None
     motor = _table(table, "motor", file, _MOTOR_KEYS,
-                   ("rotor", "stator", "rotor_inertia", "torque_max", "speed_max_rpm"))
+                   ("rotor", "stator", "rotor_inertia", "torque_max", "torque_peak",
+                    "torque_continuous", "speed_max_rpm"))
     trans = _table(table, "transmission", file, ("ratio",), ("lead", "belt_ratio"))
     current = _table(table, "current_loop", file, ("kp", "ti"))
     velocity = _table(table, "velocity_loop", file, ("kp", "ti"))
@@ -349,6 +395,8 @@ def _drive(data, structure, file) -> Drive | None:
         lowpass = (LowPassFilter(filters["lowpass_hz"]) if "lowpass_hz" in filters else None)
         notch = (NotchFilter(filters["notch_hz"], filters.get("notch_width", 0.5),
                              filters.get("notch_depth", 0.1)) if "notch_hz" in filters else None)
+        limits = _limits(motor, file)
+        sampling = _sampling(table, file, defaults)
         return Drive(
             motor=Motor(*(_number(motor, k, file, "drive.motor") for k in _MOTOR_KEYS),
                         rotor=motor.get("rotor", "motor.rotor"),
@@ -363,14 +411,70 @@ def _drive(data, structure, file) -> Drive | None:
                                          positive=False),
             torque_feedforward_inertia=_number(feedforward, "torque_inertia", file,
                                                "drive.feedforward", 0.0, positive=False),
-            lowpass=lowpass, notch=notch)
+            lowpass=lowpass, notch=notch, sampling=sampling, limits=limits)
+    except AxisFormatError:
+        raise
     except ValueError as exc:
         raise _err(file, "[drive]", str(exc), "fix the value") from None
 
 
+def _limits(motor, file) -> DriveLimits | None:
+    """Torque and speed limits of ``[drive.motor]`` (None when no torque limit is given)."""
+    if "torque_max" in motor and "torque_peak" in motor:
+        raise _err(file, "[drive.motor]", "both torque_max and torque_peak are given",
+                   "give torque_peak (torque_max is its older name)")
+    key = "torque_peak" if "torque_peak" in motor else "torque_max"
+    peak = _number(motor, key, file, "drive.motor", low=1e-3, high=1e6, unit="N m")
+    continuous = _number(motor, "torque_continuous", file, "drive.motor", low=1e-3, high=1e6,
+                         unit="N m")
+    speed = _number(motor, "speed_max_rpm", file, "drive.motor", low=1.0, high=1e6, unit="rpm")
+    if continuous is None and (peak is None or key == "torque_max"):
+        return None  # torque_max alone is the informative field of older files
+    if peak is None or continuous is None:
+        missing = "torque_continuous" if peak is not None else "torque_peak"
+        raise _err(file, f"[drive.motor] {missing}", "missing (the thrust budget needs both the "
+                   "peak and the continuous torque)",
+                   f"add {missing} [N m] from the motor and converter data")
+    if continuous > peak:
+        raise _err(file, "[drive.motor] torque_continuous", f"{continuous:g} N m exceeds "
+                   f"{key} = {peak:g} N m", "give the rated (thermally continuous) torque")
+    return DriveLimits(peak, continuous, None if speed is None else speed * 2 * math.pi / 60)
+
+
+_SAMPLING_KEYS = ("current_period", "velocity_period", "position_period", "computation_delay",
+                  "speed_filter", "continuous")
+
+
+def _sampling(table, file, defaults) -> Sampling:
+    """``[drive.sampling]``: the digital drive (defaults of current industrial drives)."""
+    sampling = _table(table, "sampling", file, (), _SAMPLING_KEYS)
+    if sampling is None:
+        defaults.append("[drive.sampling] absent: a digital drive with current and velocity "
+                        "loops at 125 us, the position loop at 1 ms and one period of "
+                        "computation delay (set continuous = true for the paper's continuous "
+                        "drive)")
+        return Sampling()
+    if _bool(sampling, "continuous", file, "drive.sampling", False):
+        if set(sampling) - {"continuous"}:
+            raise _err(file, "[drive.sampling]", "continuous = true with sample periods",
+                       "give either continuous = true or the periods")
+        return Sampling.continuous()
+    kwargs = {}
+    for key in ("current_period", "velocity_period", "position_period", "speed_filter"):
+        if key in sampling:
+            kwargs[key] = _number(sampling, key, file, "drive.sampling", positive=False,
+                                  low=0.0, high=0.1, unit="s")
+    if "computation_delay" in sampling:
+        kwargs["computation_delay"] = _number(sampling, "computation_delay", file,
+                                              "drive.sampling", positive=False, low=0.0,
+                                              high=10.0, unit="sample periods")
+    return Sampling(**kwargs)
+
+
 def _cutting(data, file) -> Cutting | None:
     table = _table(data, "cutting", file, ("teeth", "kt", "kn"),
-                   ("radial_immersion", "milling", "speed_rpm", "direction", "helix_angle"))
+                   ("radial_immersion", "milling", "speed_rpm", "direction", "helix_angle",
+                    "feed_per_tooth"))
     if table is None:
         return None
     speeds = table.get("speed_rpm", [1000.0, 12000.0])
@@ -388,12 +492,96 @@ def _cutting(data, file) -> Cutting | None:
                              helix_angle=table.get("helix_angle", 0.0))
     except (TypeError, ValueError) as exc:
         raise _err(file, "[cutting]", str(exc), "fix the value (kt, kn in N/m^2)") from None
-    return Cutting(setup, (float(speeds[0]), float(speeds[1])), direction)
+    feed = _number(table, "feed_per_tooth", file, "cutting", 1e-4, low=1e-7, high=0.01,
+                   unit="m")
+    return Cutting(setup, (float(speeds[0]), float(speeds[1])), direction, feed)
+
+
+def _operation(data, drive, friction, cutting, requirements, file, defaults
+               ) -> Operation | None:
+    """``[operation]``: feed speeds, rapid speed, acceleration, process force (defaults from
+    ``[cutting]`` and the drive's limits, each default stated in ``defaults``)."""
+    keys = ("feed_speeds", "rapid_speed", "acceleration", "process_force_pp", "feed_force",
+            "standing")
+    table = _table(data, "operation", file, (), keys)
+    if drive is None or friction is None:
+        if table is not None:
+            raise _err(file, "[operation]", "given for an axis without [drive] or [friction]",
+                       "add the drive and the friction, or remove [operation]")
+        return None
+    table = table or {}
+    kwargs = {"standing": _bool(table, "standing", file, "operation", True)}
+    if "feed_speeds" in table:
+        speeds = table["feed_speeds"]
+        if (not isinstance(speeds, list) or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) for v in speeds)):
+            raise _err(file, "[operation] feed_speeds", f"got {speeds!r}",
+                       "give a list of slide speeds while cutting [m/s], e.g. [0.02, 0.04]")
+        for v in speeds:
+            if not (math.isfinite(v) and 1e-6 <= v <= 10.0):
+                raise _err(file, "[operation] feed_speeds", f"{v!r} is outside the plausible "
+                           "range [1e-06, 10] m/s", "give speeds in m/s (1 m/min = 0.01667 m/s)")
+        kwargs["feed_speeds"] = tuple(float(v) for v in speeds)
+    elif cutting is not None and cutting.direction == "x":
+        kwargs["feed_speeds"] = cutting.feed_speeds()
+        lo, hi = kwargs["feed_speeds"]
+        defaults.append(f"[operation] feed_speeds from [cutting]: feed_per_tooth x teeth x "
+                        f"speed_rpm = {lo * 1e3:.3g} and {hi * 1e3:.3g} mm/s")
+    elif cutting is not None:
+        kwargs["feed_speeds"] = ()
+        defaults.append("[operation] feed_speeds: none (the axis is the cross axis of the cut, "
+                        "[cutting] direction = 'y': it holds position while the cutter feeds)")
+    else:
+        kwargs["feed_speeds"] = ()
+        defaults.append("[operation] feed_speeds: none ([cutting] is absent): the axis is judged "
+                        "standing only; add feed_speeds to judge it while feeding")
+    rapid = _number(table, "rapid_speed", file, "operation", low=1e-4, high=20.0, unit="m/s")
+    if rapid is None and drive.speed_max is not None:
+        rapid = drive.speed_max
+        defaults.append(f"[operation] rapid_speed from [drive.motor] speed_max_rpm and the "
+                        f"transmission: {rapid:.3g} m/s ({rapid * 60:.3g} m/min)")
+    elif rapid is not None and drive.speed_max is not None and rapid > drive.speed_max * 1.000001:
+        raise _err(file, "[operation] rapid_speed", f"{rapid:g} m/s needs more than the motor's "
+                   f"speed_max_rpm ({drive.speed_max:.4g} m/s at the slide)",
+                   "lower it or raise speed_max_rpm")
+    kwargs["rapid_speed"] = rapid
+    if "acceleration" in table:
+        kwargs["acceleration"] = _number(table, "acceleration", file, "operation", low=1e-3,
+                                         high=200.0, unit="m/s^2")
+    elif drive.limits is not None:
+        defaults.append("[operation] acceleration: 1 m/s^2 (add acceleration [m/s^2] for the "
+                        "axis' rapid moves)")
+    force = _number(table, "process_force_pp", file, "operation", low=1e-3, high=1e7, unit="N")
+    feed_force = _number(table, "feed_force", file, "operation", positive=False, low=0.0,
+                         high=1e7, unit="N")
+    if (force is None or feed_force is None) and cutting is not None \
+            and requirements.depth_required is not None:
+        from .chatter.forces import cutting_force
+
+        cut = cutting_force(cutting.setup, requirements.depth_required, cutting.feed_per_tooth,
+                            cutting.direction)
+        if force is None:
+            force = cut.peak_to_peak
+            defaults.append(f"[operation] process_force_pp from [cutting] at the required depth "
+                            f"{requirements.depth_required * 1e3:g} mm and "
+                            f"{cutting.feed_per_tooth * 1e3:g} mm per tooth: {force:.4g} N")
+        if feed_force is None:
+            feed_force = abs(cut.mean) if cutting.direction == "x" else 0.0
+    if force is None:
+        defaults.append("[operation] process_force_pp: none (no [cutting] or no "
+                        "[requirements] depth_required); the standing regime is judged at "
+                        "600 N peak to peak")
+    kwargs.update(process_force_pp=force, feed_force=feed_force or 0.0)
+    try:
+        return Operation(**kwargs, defaults=())
+    except ValueError as exc:
+        raise _err(file, "[operation]", str(exc), "fix the values") from None
 
 
 def _tuning(data, file) -> TuningSettings:
     names = ("c", "kv", "kp", "ti")
-    table = _table(data, "tuning", file, (), ("free", "chatter_weight", *names))
+    table = _table(data, "tuning", file, (), ("free", "chatter_weight", "friction_spread",
+                                              *names))
     if table is None:
         return TuningSettings()
     free = table.get("free", list(names))
@@ -414,12 +602,28 @@ def _tuning(data, file) -> TuningSettings:
     weight = table.get("chatter_weight", 0.0)
     if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not 0 <= weight <= 1:
         raise _err(file, "[tuning] chatter_weight", f"got {weight!r}", "give a number in [0, 1]")
-    return TuningSettings(tuple(free), MappingProxyType(bounds), float(weight))
+    spread = table.get("friction_spread", {})
+    if not isinstance(spread, dict):
+        raise _err(file, "[tuning] friction_spread", f"got {spread!r}",
+                   "give a table such as { fc = 0.3, sigma0 = 3.0 } (fractions for fc, fs, "
+                   "sigma1; a factor for sigma0)")
+    try:
+        from .friction.lugre import BIANCHI2014
+        from .regimes import friction_samples
+
+        friction_samples(BIANCHI2014, spread)  # validates names and values
+    except (TypeError, ValueError) as exc:
+        raise _err(file, "[tuning] friction_spread", str(exc), "fix the spread") from None
+    return TuningSettings(tuple(free), MappingProxyType(bounds), float(weight),
+                          MappingProxyType({k: float(v) for k, v in spread.items()}))
 
 
 def _requirements(data, file) -> Requirements:
+    ratios = ("bandwidth_ratio_min", "current_bandwidth_ratio_min", "ti_bandwidth_min",
+              "ti_bandwidth_max")
     keys = ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg", "gain_margin_min_db",
-            "kv_min", "kv_min_m_per_min_per_mm", "band_hz", "loop_band_hz", "depth_required")
+            "kv_min", "kv_min_m_per_min_per_mm", "band_hz", "loop_band_hz", "depth_required",
+            "thrust_margin", "nonlinear_tolerance", *ratios)
     table = _table(data, "requirements", file, (), keys)
     if table is None:
         return Requirements()
@@ -428,6 +632,15 @@ def _requirements(data, file) -> Requirements:
                 "gain_margin_min_db", "kv_min", "depth_required"):
         if key in table:
             kwargs[key] = _number(table, key, file, "requirements", positive=False)
+    for key in ratios:
+        if key in table:
+            kwargs[key] = _number(table, key, file, "requirements", low=0.0, high=1e3,
+                                  unit="(a ratio)")
+    for key in ("thrust_margin", "nonlinear_tolerance"):
+        if key in table:
+            kwargs[key] = _number(table, key, file, "requirements", positive=False, low=0.0,
+                                  high=0.99 if key == "thrust_margin" else 10.0,
+                                  unit="(a fraction)")
     if "kv_min_m_per_min_per_mm" in table:
         kwargs["kv_min"] = kv_from_m_per_min_per_mm(
             _number(table, "kv_min_m_per_min_per_mm", file, "requirements", positive=False))
@@ -484,9 +697,16 @@ def load_axis(path) -> Axis:
         raise _err(file, "[axis] name", "missing", 'add name = "my_axis"')
     folder = file.parent
     structure = _structure(data["structure"], folder, file)
+    defaults: list[str] = []
+    friction = _friction(data, structure, folder, file)
+    drive = _drive(data, structure, file, defaults)
+    cutting = _cutting(data, file)
+    requirements = _requirements(data, file)
+    if drive is not None and drive.limits is None:
+        defaults.append("[drive.motor] has no torque_peak and torque_continuous: the thrust "
+                        "budget is not checked")
+    operation = _operation(data, drive, friction, cutting, requirements, file, defaults)
     return Axis(name=name, description=str(data["axis"].get("description", "")),
-                path=folder.resolve(), structure=structure,
-                friction=_friction(data, structure, folder, file),
-                drive=_drive(data, structure, file), cutting=_cutting(data, file),
-                requirements=_requirements(data, file), tuning=_tuning(data, file),
-                tables=_frozen(data))
+                path=folder.resolve(), structure=structure, friction=friction, drive=drive,
+                cutting=cutting, operation=operation, requirements=requirements,
+                tuning=_tuning(data, file), tables=_frozen(data), defaults=tuple(defaults))

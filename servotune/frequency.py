@@ -32,7 +32,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-from .drive import Drive
+from .drive import Drive, cascade_response
 from .plant import Contact, UnstableLoopError
 from .structure.model import ModalModel
 
@@ -271,10 +271,7 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
             g[:, idx[p], idx[p]] -= z / len(pads)
     if drive is not None:
         m = drive.motor
-        ci = _tf_values(drive.current_loop.transfer_function(), s)
-        cv = _tf_values(drive.velocity_loop.transfer_function(), s)
-        filt = _tf_values(drive.torque_filter(), s)
-        den = s * m.inductance + m.resistance + ci
+        parts = cascade_response(drive, s)
         rel = np.zeros(n)  # phi = rel . x
         rel[idx[m.rotor]] = 1.0
         if m.stator:
@@ -284,11 +281,13 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
             fb[idx[drive.encoder]] = 1.0
         else:
             fb = drive.ratio * rel
-        a = ci * filt * cv
+        a = parts.current_forward * parts.setpoint * parts.velocity_pi
         b = m.torque_constant * m.back_emf_constant
-        # T = -(a Kv/r fb + (a + b) s rel) . x / den
-        torque = -((a * drive.kv / drive.ratio)[:, None] * fb[None, :]
-                   + ((a + b) * s)[:, None] * rel[None, :]) / den[:, None]
+        k_pos = parts.position_delay * drive.kv / drive.ratio
+        # T = -(a D_p Kv/r fb + (a M_v + b) s rel) . x / den
+        torque = -((a * k_pos)[:, None] * fb[None, :]
+                   + ((a * parts.speed_measurement + b) * s)[:, None] * rel[None, :]
+                   ) / parts.winding[:, None]
         g += rel[None, :, None] * torque[:, None, :]
     e = np.zeros(n)
     e[idx[force]] = 1.0
@@ -450,10 +449,12 @@ def analyse_loop(loop: control.StateSpace, omega=None) -> LoopAnalysis:
         if 1.0 / m_at < gm:
             gm = 1.0 / m_at
             wpc = float(omega[i] * (omega[i + 1] / omega[i]) ** f)
-    with np.errstate(all="ignore"):
-        t0 = float(np.abs(np.asarray(closed.dcgain())).ravel()[0])
-    if not math.isfinite(t0) or t0 == 0.0:
-        t0 = t[0]
+    # the closed-loop gain two decades below the grid stands for the DC gain: the state
+    # space's own dcgain() is ill-conditioned when the loop carries a rigid-body mode (a free
+    # integrator of position)
+    l_low = complex(fast_frequency_response(loop, [omega[0] / 100.0],
+                                            rtol=1e-7).complex.reshape(-1)[0])
+    t0 = abs(l_low / (1.0 + l_low))
     below = np.nonzero(t < t0 / math.sqrt(2.0))[0]
     if below.size and below[0] > 0:
         i = below[0]

@@ -45,6 +45,7 @@ import control
 import numpy as np
 
 from .drive import Drive, drive_blocks
+from .interconnect import connect
 from .friction.equivalent import describing_function
 from .friction.lugre import LuGreParameters, sliding_linearisation
 from .structure.model import ModalModel, signal_name
@@ -282,9 +283,7 @@ def build_plant(structure: ModalModel, drive: Drive | None = None, contact: Cont
     if drive is not None:
         plant_inputs = ["x_ref", "v_ref", "a_ref", *plant_inputs, "t_dist"]
         plant_outputs += ["slide_x", "omega_motor", "following_error", "torque", "current"]
-    return control.interconnect(blocks, inplist=plant_inputs, outlist=plant_outputs,
-                                inputs=plant_inputs, outputs=plant_outputs, name=name,
-                                check_unused=False)
+    return connect(blocks, plant_inputs, plant_outputs, name=name)
 
 
 def _motor_port(drive: Drive) -> list[control.StateSpace]:
@@ -333,7 +332,7 @@ def loop_transfer(structure: ModalModel, drive: Drive, contact: Contact | None =
             blocks[i] = control.ss(b.A, b.B, b.C, b.D, inputs=b.input_labels, outputs=labels,
                                    states=b.state_labels, name=b.name)
     signal = broken[0]
-    open_loop = control.interconnect(blocks, inplist=[signal], outlist=[f"{signal}_measured"],
-                                     inputs=["u"], outputs=["y"], check_unused=False)
+    open_loop = connect(blocks, [signal], [f"{signal}_measured"], name=f"L_{loop}",
+                        input_names=["u"], output_names=["y"])
     return control.ss(open_loop.A, open_loop.B, -open_loop.C, -open_loop.D, inputs=["u"],
                       outputs=["y"], name=f"L_{loop}")

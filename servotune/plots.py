@@ -27,6 +27,8 @@ __all__ = [
     "plot_stability_map",
     "plot_stribeck",
     "plot_sweep_envelope",
+    "plot_regime_verification",
+    "plot_regime_compliance",
     "plot_two_mass_compliance",
 ]
 
@@ -567,4 +569,84 @@ def plot_mode_peaks(mode_peaks) -> Figure:
     ax.set_title("Several modes, one C: each mode's compliance peak against C (sec 5.2)")
     ax.grid(True, which="both", alpha=0.4)
     ax.legend(fontsize=8)
+    return fig
+
+
+def plot_regime_compliance(before, after, band=None, title: str | None = None) -> Figure:
+    """Work-piece compliance of every regime model, before (dashed) and after (solid) tuning.
+
+    Parameters
+    ----------
+    before, after : sequence of ComplianceCurve
+        One per regime model (labels ``"before, <model>"``, ``"after, <model>"``).
+    band : (float, float), optional
+        The requirement band [rad/s], shaded.
+    """
+    fig = Figure(figsize=(8.5, 5.0), layout="constrained")
+    ax = fig.add_subplot()
+    colors = {}
+    palette = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown"]
+    for style, curves in (("--", before), ("-", after)):
+        for c in curves:
+            model = c.label.split(", ", 1)[-1]
+            color = colors.setdefault(model, palette[len(colors) % len(palette)])
+            ax.loglog(np.asarray(c.omega) * HZ_PER_RAD_S, np.abs(c.values), style, lw=1.4,
+                      color=color, label=c.label)
+            ax.plot([c.peak_frequency * HZ_PER_RAD_S], [c.peak_compliance],
+                    "o" if style == "-" else "s", color=color, ms=4, mfc="none"
+                    if style == "--" else color)
+    if band is not None:
+        ax.axvspan(band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S, color="0.9", zorder=0,
+                   label="requirement band")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("|x/F| at the work piece [m/N]")
+    ax.set_title(title or "Work-piece compliance per regime: before (dashed), after (solid)",
+                 fontsize=10)
+    ax.grid(True, which="both", alpha=0.4)
+    ax.legend(fontsize=7, ncol=2)
+    return fig
+
+
+def plot_regime_verification(regimes, linear=None, title: str | None = None) -> Figure:
+    """The nonlinear verification: simulated sweep envelopes per regime over the linear claims.
+
+    Parameters
+    ----------
+    regimes : sequence of RegimeVerdict
+        From :func:`servotune.verdict.nonlinear_verdict`; their sweeps' envelopes are drawn
+        (after solid, before thin grey).
+    linear : dict, optional
+        ``{regime: [(label, omega [rad/s], H complex), ...]}`` linear curves (dashed).
+    """
+    regimes = [r for r in regimes if any(s.envelope for s in r.simulations)] or list(regimes)
+    n = max(len(regimes), 1)
+    fig = Figure(figsize=(8.5, 3.2 * n), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(n, 1, squeeze=False)[:, 0])
+    for ax, r in zip(axes, regimes, strict=False):
+        for s in r.simulations:
+            if not s.envelope:
+                continue
+            f_hz, amp = s.envelope
+            if s.design == "after":
+                ax.loglog(f_hz, amp, lw=1.4, label=f"after, {s.force_pp:.3g} N p-p")
+            else:
+                ax.loglog(f_hz, amp, lw=0.8, color="0.55",
+                          label=f"before, {s.force_pp:.3g} N p-p")
+        for label, omega, values in (linear or {}).get(r.name, []):
+            ax.loglog(np.asarray(omega) * HZ_PER_RAD_S, np.abs(values), "--", lw=1.0,
+                      label=label)
+        if r.claimed_peak is not None and math.isfinite(r.claimed_peak):
+            ax.axhline(r.claimed_peak, color="k", lw=0.8)
+            ax.axhspan(r.claimed_peak, r.claimed_peak * 1.3, color="tab:green", alpha=0.08)
+        ax.axvline(r.band_hz[0], color="k", ls=":", lw=0.8)
+        ax.axvline(r.band_hz[1], color="k", ls=":", lw=0.8)
+        verdict = "holds" if r.holds else "does NOT hold"
+        ax.set_title(f"{r.name}: the claim (black line; green: tolerance) {verdict}",
+                     fontsize=9)
+        ax.set_ylabel("|x/F| [m/N]")
+        ax.grid(True, which="both", alpha=0.4)
+        ax.legend(fontsize=7, ncol=2)
+    axes[-1].set_xlabel("excitation frequency [Hz] (dotted: the swept band)")
+    if title:
+        fig.suptitle(title, fontsize=10)
     return fig

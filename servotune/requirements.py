@@ -1,10 +1,31 @@
-"""Design requirements of a feed axis: loop robustness, minimum Kv, bands, depth of cut.
+"""Design requirements of a feed axis: loop robustness, loop hierarchy, the thrust reserve,
+minimum Kv, bands, depth of cut, and how closely the nonlinear axis must hold the claims.
 
 SI inside (rad/s, 1/s, m); margins are given in the units engineers quote them (deg, dB) under
 suffixed names. Gain and phase margin requirements are turned into Ms limits through the Ms
 disk: a Nyquist curve outside the circle of radius 1/Ms about -1 has
 ``GM >= Ms/(Ms - 1)`` and ``PM >= 2 asin(1/(2 Ms))`` (Astrom and Murray, Feedback Systems,
 2nd ed., sec 13.3).
+
+Loop hierarchy, with their defaults and where they come from:
+
+* ``bandwidth_ratio_min`` = 4: the closed velocity loop at least 4 times as wide as the closed
+  position loop. Practice asks the inner loop of a cascade to be 3 to 5 (some say 5 to 10)
+  times faster than the outer one; for a position loop Kv/s around a velocity loop of time
+  constant T, the aperiodic setting Kv T = 1/4 (no overshoot) gives a bandwidth ratio of 3.1
+  (Ellis, Control System Design Guide, 4th ed., 2012, ch 17; Schroeder, Elektrische Antriebe -
+  Regelung von Antriebssystemen, 4th ed., Springer 2015, ch 3, the damping optimum).
+* ``current_bandwidth_ratio_min`` = 3: the current loop likewise above the velocity loop
+  (industrial servo drives ship current loops of 650-900 Hz over speed loops of 140-250 Hz,
+  ratios 3 to 5: SINAMICS Engineering Manual, Siemens 2015, sec 6.2.3).
+* ``ti_bandwidth_min`` = 3 and ``ti_bandwidth_max`` = 30 bound Ti times the velocity loop's
+  closed-loop bandwidth w_b. The symmetric optimum sets Ti = a^2 T_sum for a crossover
+  w_c = 1/(a T_sum), with a = 2 to 4 (Kessler 1958; Schroeder 2015, ch 3); its closed loop then
+  has Ti w_b = 3.4 to 6.1 (computed for the ideal loop). Below 3 the integrator eats the phase
+  margin; far above 30 the integral action no longer rejects load torques (friction) within a
+  few time constants of the loop. The bandwidth is used, not the gain crossover, because with a
+  resonant load the velocity loop's gain crosses 1 several times while its closed-loop
+  bandwidth stays well defined.
 """
 
 from __future__ import annotations
@@ -29,6 +50,16 @@ class Requirements:
         Smallest allowed position gain Kv [1/s].
     depth_required : float, optional
         Required axial depth of cut [m] (for the chatter margin).
+    thrust_margin : float
+        Fraction of the motor's thrust kept in reserve (0.2: the needs may use 80 %).
+    bandwidth_ratio_min : float
+        Velocity-loop over position-loop closed-loop bandwidth, at least (0: not required).
+    current_bandwidth_ratio_min : float
+        Current-loop over velocity-loop closed-loop bandwidth, at least (0: not required).
+    ti_bandwidth_min, ti_bandwidth_max : float
+        Range of Ti times the velocity loop's closed-loop bandwidth [rad/s x s] (0: no bound).
+    nonlinear_tolerance : float
+        How far above the design's claim the nonlinear axis may peak (0.3: 30 %).
     band : (float, float)
         Frequency band [rad/s] of the compliance-peak objective.
     loop_band : (float, float)
@@ -43,8 +74,29 @@ class Requirements:
     band: tuple[float, float] = (2 * math.pi * 5.0, 2 * math.pi * 300.0)
     loop_band: tuple[float, float] = (2 * math.pi * 0.1, 2 * math.pi * 3000.0)
     depth_required: float | None = None
+    thrust_margin: float = 0.2
+    bandwidth_ratio_min: float = 4.0
+    current_bandwidth_ratio_min: float = 3.0
+    ti_bandwidth_min: float = 3.0
+    ti_bandwidth_max: float = 30.0
+    nonlinear_tolerance: float = 0.3
 
     def __post_init__(self) -> None:
+        for name in ("thrust_margin", "bandwidth_ratio_min", "current_bandwidth_ratio_min",
+                     "ti_bandwidth_min", "ti_bandwidth_max", "nonlinear_tolerance"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"Requirements.{name} must be finite and >= 0, got {value!r}")
+            object.__setattr__(self, name, value)
+        if not self.thrust_margin < 1:
+            raise ValueError("Requirements.thrust_margin is a fraction of the thrust in [0, 1)")
+        for name in ("bandwidth_ratio_min", "current_bandwidth_ratio_min"):
+            if 0 < getattr(self, name) < 1:
+                raise ValueError(f"Requirements.{name} must be 0 (not required) or >= 1 (the "
+                                 f"inner loop at least as wide), got {getattr(self, name)!r}")
+        if self.ti_bandwidth_max and self.ti_bandwidth_max <= self.ti_bandwidth_min:
+            raise ValueError("Requirements.ti_bandwidth_max must exceed ti_bandwidth_min (or "
+                             "be 0: no upper bound)")
         for name in ("ms_velocity_max", "ms_position_max"):
             value = float(getattr(self, name))
             if not value > 1.0 or not math.isfinite(value):

@@ -75,13 +75,22 @@ modal_damping = 0.03                # damping ratio of every mode (or a list, on
 
 [friction]                          # all axis friction, lumped at the guide-way pads
 pads = ["pad1.x", "pad2.x"]         # relative-X DOFs of the pads; friction is shared equally
-lugre = "bianchi2014"               # a named set (bianchi2014, canudas1995) or a table of the
-                                    # axis totals: {{ fc = 2198.0, fs = 6013.0, vs = 0.01,
-                                    # delta = 1.0, sigma0 = 5.9e9, sigma1 = 1.6e7,
-                                    # sigma2 = 5578.0 }}  [N, N, m/s, -, N/m, N s/m, N s/m]
 viscous = 5578.0                    # viscous-only model and initial guide-way damping [N s/m]
 # measurements = {{ stribeck = "stribeck.csv" }}   # identify (Fc, Fs, vs, delta, sigma2) from a
 #                                     CSV with columns v_m_per_s, f_n (both velocity signs)
+
+[friction.lugre]                    # axis totals (or lugre = "bianchi2014", a named set)
+fc = 2198.0                         # Coulomb friction [N]
+fs = 6013.0                         # static friction [N]
+vs = 0.01                           # Stribeck velocity [m/s]
+delta = 1.0                         # Stribeck exponent [-]
+sigma0 = 5.9e9                      # bristle stiffness [N/m]
+sigma1 = 1.6e7                      # bristle damping [N s/m]
+sigma2 = 5578.0                     # viscous friction [N s/m]
+sigma1_decay_speed = 1.0e-3         # the bristle damping fades above this speed [m/s] (Olsson
+                                    # et al. 1998): below 4 sqrt(2e) fc/sigma1 the contact is
+                                    # passive; with a constant sigma1 the sliding pads can
+                                    # stick-slip (see models/paper_x_axis/README.md)
 
 [drive]
 encoder = "linear"                  # position feedback: "linear" (DOF encoder.x) or "motor"
@@ -93,6 +102,17 @@ torque_constant = 1.2               # kt [N m/A]
 back_emf_constant = 1.2             # ke [V s/rad]
 resistance = 0.4                    # R [ohm]
 inductance = 3.0e-3                 # L [H]
+torque_peak = 36.0                  # largest torque (converter current limit x kt) [N m]
+torque_continuous = 12.0            # rated, thermally continuous torque [N m]
+speed_max_rpm = 3000.0              # largest motor speed [rpm] (sets the rapid speed)
+
+[drive.sampling]                    # the digital drive (delays cost phase: margins include them)
+current_period = 125.0e-6           # sample period of the current controller [s]
+velocity_period = 125.0e-6          # of the speed controller [s] (speed from encoder positions)
+position_period = 1.0e-3            # of the position controller [s]
+computation_delay = 1.0             # sampling to output, in sample periods
+speed_filter = 0.0                  # time constant of a speed-measurement filter [s]
+# continuous = true                 # instead: the paper's continuous drive (no delays)
 
 [drive.transmission]
 ratio = {RATIO!r}         # slide travel per motor radian [m/rad] = lead / (2 pi) / belt ratio
@@ -123,8 +143,17 @@ kt = 2.0e9                          # tangential cutting coefficient [N/m^2]
 kn = 0.6e9                          # normal (radial) cutting coefficient [N/m^2]
 radial_immersion = 0.5              # a/D in (0, 1]
 milling = "down"                    # "down" or "up"
-speed_rpm = [1000.0, 12000.0]       # spindle-speed range [rpm]
+speed_rpm = [3000.0, 12000.0]       # spindle-speed range [rpm]
 direction = "x"                     # the flexible (feed) direction: "x" or "y"
+feed_per_tooth = 1.0e-4             # [m]; with teeth and speed_rpm it gives the feed speeds
+
+[operation]                         # the regimes the axis works in (all keys optional)
+# feed_speeds = [0.01, 0.05]        # slide speeds while cutting [m/s] (default from [cutting])
+# rapid_speed = 0.5                 # [m/s] (default from speed_max_rpm and the transmission)
+acceleration = 2.0                  # of rapid moves [m/s^2]
+# process_force_pp = 300.0          # cutting force p-p at the work piece [N] (default from
+#                                     [cutting] at the required depth)
+# standing = true                   # the axis also cuts standing still
 
 [requirements]
 ms_velocity_max = 2.0               # largest sensitivity peak of the velocity loop
@@ -134,14 +163,23 @@ gain_margin_min_db = 6.0
 # kv_min_m_per_min_per_mm = 1.0     # smallest Kv the tuning may choose
 band_hz = [5.0, 300.0]              # band of the compliance-peak objective [Hz]
 depth_required = 2.0e-3             # required axial depth of cut [m]
+# thrust_margin = 0.2               # fraction of the motor's thrust kept in reserve
+# bandwidth_ratio_min = 4.0         # velocity-loop bandwidth >= this x position-loop bandwidth
+# current_bandwidth_ratio_min = 3.0 # current-loop bandwidth >= this x velocity-loop bandwidth
+# ti_bandwidth_min = 3.0            # Ti x velocity-loop bandwidth within [min, max]
+# ti_bandwidth_max = 30.0
+# nonlinear_tolerance = 0.3         # the nonlinear axis may peak this much above the claim
 
 [tuning]                            # what `servotune tune` may change, and within which bounds
 free = ["c", "kv", "kp", "ti"]      # guide-way damping C, Kv, velocity-loop Kp and Ti
-c = [1.0e3, 1.0e8]                  # [N s/m] (axis total over the pads)
+# c = [5578.0, 1.0e8]               # [N s/m] axis total (default: from the guide ways' own
+#                                     viscous friction sigma2 up: damping is added, not removed)
 kv = [1.0, 300.0]                   # [1/s]
 # kp = [0.04, 370.0]                # [N m s/rad] (default: a factor 100 around the initial kp)
 ti = [1.0e-3, 0.2]                  # [s]; <= 0.2 s keeps integral action in the velocity loop
 chatter_weight = 0.0                # 0: compliance peak only; 1: chatter limit only
+# friction_spread = {{ fc = 0.3, sigma0 = 3.0 }}   # tune for the friction spread too (fractions
+#                                     for fc, fs, sigma1; a factor for sigma0)
 '''
 
 

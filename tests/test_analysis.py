@@ -19,7 +19,8 @@ MODELS = Path(__file__).resolve().parents[1] / "models"
 
 @pytest.fixture(scope="module")
 def axis():
-    return load_axis(MODELS / "paper_x_axis")
+    # the paper's model: the drive in continuous time (sec 3)
+    return load_axis(MODELS / "paper_x_axis").with_continuous_drive()
 
 
 def test_bundled_drive_reproduces_table3_resonances(axis):
@@ -62,7 +63,8 @@ def test_loops_of_the_bundled_drive_are_stable_with_margins(axis):
 
 
 def test_bode_command_json(tmp_path, capsys):
-    assert main(["bode", str(MODELS / "paper_x_axis"), "--out", str(tmp_path), "--json"]) == 0
+    assert main(["bode", str(MODELS / "paper_x_axis"), "--continuous", "--out", str(tmp_path),
+                 "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     for loop in ("velocity_loop", "position_loop"):
         for key in ("phase_margin_deg", "gain_margin_db", "ms", "bandwidth_hz"):
@@ -73,17 +75,17 @@ def test_bode_command_json(tmp_path, capsys):
 
 def test_compliance_command_json_and_contacts(tmp_path, capsys):
     assert main(["compliance", str(MODELS / "paper_x_axis"), "--contact", "locked",
-                 "--out", str(tmp_path), "--json"]) == 0
+                 "--continuous", "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["peak_frequency_hz"] == pytest.approx(57.0, abs=1.0)
     assert len(out["fig9"]) == 5 and out["peak_compliance"] > 0
     # the describing-function contact needs its amplitude and frequency
     assert main(["compliance", str(MODELS / "paper_x_axis"), "--contact", "equivalent",
-                 "--out", str(tmp_path), "--force"]) == 1
+                 "--continuous", "--out", str(tmp_path), "--force"]) == 1
     assert "amplitude" in capsys.readouterr().err
     assert main(["compliance", str(MODELS / "paper_x_axis"), "--contact", "equivalent",
                  "--amplitude", "2e-6", "--frequency-hz", "57", "--out", str(tmp_path),
-                 "--force", "--json"]) == 0
+                 "--continuous", "--force", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert "describing function" in out["contact_note"]
 
@@ -97,3 +99,13 @@ def test_two_mass_compliance_without_drive(tmp_path, capsys):
     assert out["controlled"] is False
     assert out["peak_compliance"] == pytest.approx(g / 16e6, rel=1e-3)
     assert np.isfinite(out["peak_frequency_hz"])
+
+
+def test_the_bundled_gains_are_unstable_with_the_digital_drive_and_the_error_says_so(tmp_path,
+                                                                                   capsys):
+    # the paper's velocity loop (kp = 35 N m s/rad, crossover ~540 Hz in continuous time) loses
+    # more phase to a 125 us drive's 250 us of loop delay (2 pi 540 Hz x 250 us = 49 deg) than
+    # its margin of 57 deg minus what the sampled current loop costs: unstable
+    assert main(["bode", str(MODELS / "paper_x_axis"), "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert "unstable" in err and "--continuous" in err and "[drive.sampling]" in err

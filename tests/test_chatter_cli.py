@@ -109,9 +109,10 @@ def test_axis_lobes_agree_with_the_closed_loop_compliance(tmp_path, capsys):
     from servotune.axis import load_axis
 
     models = __import__("pathlib").Path(__file__).resolve().parents[1] / "models"
-    assert main(["lobes", str(models / "paper_x_axis"), "--out", str(tmp_path), "--json"]) == 0
+    assert main(["lobes", str(models / "paper_x_axis"), "--continuous", "--out", str(tmp_path),
+                 "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    axis = load_axis(models / "paper_x_axis")
+    axis = load_axis(models / "paper_x_axis").with_continuous_drive()
     curve = analysis.compliance_curve(axis, analysis.axis_contact(axis, "viscous"),
                                       omega=2 * np.pi * np.geomspace(1.0, 2000.0, 20000))
     mu = chatter.directional_factor(axis.cutting.setup, "x")

@@ -140,7 +140,7 @@ def test_friction_spread_study_any_executor():
     ceq, keq = st.describing_function(p, np.array(amplitudes), w)
     np.testing.assert_allclose(nominal["ceq_lugre"], ceq, rtol=1e-12)
     np.testing.assert_allclose(nominal["keq_lugre"], keq, rtol=1e-12)
-    axis = st.load_axis(example.PAPER_AXIS)
+    axis = st.load_axis(example.PAPER_AXIS).with_continuous_drive()
     omega = 2 * math.pi * np.geomspace(*example.GRID_HZ[:2], example.GRID_HZ[2])
     direct = analysis.compliance_curve(axis, Contact.stiction(p.sigma0, p.sigma1, p.sigma2),
                                        omega=omega)
@@ -211,7 +211,10 @@ def test_tune_axis_from_matrix_market(generate):
     assert r["ms_velocity"] <= 1.005 * ms_limit
     assert r["ms_position"] <= 1.005 * ms_limit
 
-    # second method: the interconnected plant evaluated by python-control on a dense grid
+    # second method: the interconnected plant of every regime model, evaluated by
+    # python-control on a dense grid; the worst of them is the claim
+    from servotune.design import axis_regimes
+
     axis = st.load_axis(example.AXIS)
     omega = np.geomspace(*r["band"], 20001)
     peaks = {}
@@ -219,10 +222,19 @@ def test_tune_axis_from_matrix_market(generate):
         d = r[key]
         drive = dataclasses.replace(axis.drive, kv=d["kv"],
                                     velocity_loop=st.PIController(d["kp"], d["ti"]))
-        plant = build_plant(axis.structure, drive, Contact.viscous(d["c"]), axis.pads)
-        h = control.frequency_response(plant[plant.output_labels.index("wp_x"),
-                                             plant.input_labels.index("f_wp_x")], omega)
-        peaks[key] = float(np.abs(h.complex).max())
+        worst = 0.0
+        for model in axis_regimes(axis, r["initial_design"]["c"]):
+            if not model.cutting:
+                continue
+            plant = build_plant(axis.structure, drive, model.contact(d["c"]), axis.pads)
+            h = control.frequency_response(plant[plant.output_labels.index("wp_x"),
+                                                 plant.input_labels.index("f_wp_x")], omega)
+            worst = max(worst, float(np.abs(h.complex).max()))
+        peaks[key] = worst
     assert peaks["initial_design"] == pytest.approx(r["peak_compliance_before"], rel=1e-3)
     assert peaks["design"] == pytest.approx(r["peak_compliance_after"], rel=1e-3)
-    assert peaks["design"] < 0.5 * peaks["initial_design"]
+    assert peaks["design"] < peaks["initial_design"]
+    # the nonlinear axis holds the claim in every regime (within the 30 % tolerance)
+    for regime in r["regimes"]:
+        assert regime["holds"], regime["reason"]
+        assert regime["nonlinear_peak_after_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]

@@ -13,6 +13,7 @@ from servotune.cli import main
 from servotune.friction import LuGreParameters
 from servotune.simulate import table3 as t3
 from servotune.axis import load_axis
+from servotune.drive import Sampling
 from servotune.simulate.setup import AxisSetup, axis_setup
 from servotune.simulate.verify import design_setup, verify_design
 
@@ -107,7 +108,8 @@ def small_axis_description(tmp_path, friction=True, drive=True):
 def test_axis_setup_reads_the_description(tmp_path):
     s = axis_setup(small_axis_description(tmp_path))
     assert s.pads == ("pad1.x", "pad2.x") and s.lugre == P and s.viscous == 5578.0
-    assert s.drive == small_drive(velocity_feedforward=1.0)
+    # no [drive.sampling]: the digital drive of current industrial drives by default
+    assert s.drive == small_drive(velocity_feedforward=1.0, sampling=Sampling())
 
 
 @pytest.mark.parametrize("friction, drive, match", [
@@ -168,7 +170,7 @@ def test_describing_function_prediction_follows_large_amplitude():
     from pathlib import Path
 
     setup = axis_setup(load_axis(Path(__file__).resolve().parents[1] / "models"
-                                 / "paper_x_axis"))
+                                 / "paper_x_axis").with_continuous_drive())
     res = verify_design(setup, forces=(2000.0,), f_start_hz=40.0, f_end_hz=75.0, duration=4.0)
     s = res["sweeps"][0]
     assert s["pad_amplitude_m"] > setup.lugre.fs / setup.lugre.sigma0
@@ -189,7 +191,7 @@ def test_bundled_axis_slides_without_stick_slip_at_30_mm_s():
 
     from servotune.simulate import LuGreFriction, NonlinearAxis, constant_speed, simulate
     setup = axis_setup(load_axis(Path(__file__).resolve().parents[1] / "models"
-                                 / "paper_x_axis"))
+                                 / "paper_x_axis").with_continuous_drive())
     assert setup.lugre.sigma1_decay_speed == 1e-3
     v = 0.03
 

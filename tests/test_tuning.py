@@ -42,25 +42,46 @@ def test_two_mass_copt_is_the_closed_form(alpha):
     assert_allclose(result.after.peak_compliance, twomass.g_alpha(alpha) / system.k, rtol=1e-6)
 
 
-def test_port_responses_equal_the_state_space_plant():
-    structure, drive = small_axis(), small_drive()
-    problem = TuningProblem(structure, PADS, c=8e4, drive=drive, free=("c", "kv", "kp", "ti"))
+def _direct(ss, omega):
+    """Balanced direct evaluation of a SISO state space (python-control's own evaluation loses
+    digits on these badly scaled systems)."""
+    import scipy.linalg as sl
+
+    a, t = sl.matrix_balance(ss.A, permute=False, separate=True)
+    b, c = ss.B / t[0][:, None], ss.C * t[0][None, :]
+    return np.array([(c @ np.linalg.solve(1j * w * np.eye(a.shape[0]) - a, b))[0, 0]
+                     + ss.D[0, 0] for w in omega])
+
+
+@pytest.mark.parametrize("digital", [False, True])
+def test_port_responses_equal_the_state_space_plant(digital):
+    # every regime model's contact and, with a digital drive, the delays (as the Pade blocks of
+    # the state space when exact_delays=False) in the port model against build_plant
+    from servotune.drive import Sampling
+    from servotune.friction import LuGreParameters
+    from servotune.regimes import RegimeModel
+
+    structure = small_axis()
+    drive = small_drive(sampling=Sampling(speed_filter=2e-4) if digital else None)
+    p = LuGreParameters(fc=300.0, fs=600.0, vs=0.01, delta=1.0, sigma0=1e9, sigma1=2e6,
+                        sigma2=2e3, sigma1_decay_speed=1e-3)
+    models = (RegimeModel("standing", "presliding", p),
+              RegimeModel("standing", "describing", p, amplitude=2e-7, frequency=300.0),
+              RegimeModel("feeding 30 mm/s", "sliding", p, speed=0.03),
+              RegimeModel("viscous", "viscous"))
+    problem = TuningProblem(structure, PADS, c=8e4, drive=drive, free=("c", "kv", "kp", "ti"),
+                            regimes=models)
     design = Design(c=2.2e5, kv=30.0, kp=5.0, ti=4e-3)
     omega = 2 * np.pi * np.geomspace(0.5, 2000.0, 200)
-    got = evaluate(problem, design, omega)
-    d, contact = problem.drive_for(design), Contact.viscous(design.c)
-    plant = build_plant(structure, d, contact, PADS)
-    assert_allclose(got["compliance"], plant_compliance(plant, omega), rtol=1e-9)
-    for loop in ("velocity", "position"):
-        ref = loop_transfer(structure, d, contact, PADS, loop)
-        # balanced direct evaluation of the state space (python-control's own evaluation loses
-        # digits on this badly scaled system)
-        import scipy.linalg as sl
-        a, t = sl.matrix_balance(ref.A, permute=False, separate=True)
-        b, c = ref.B / t[0][:, None], ref.C * t[0][None, :]
-        direct = np.array([(c @ np.linalg.solve(1j * w * np.eye(a.shape[0]) - a, b))[0, 0]
-                           + ref.D[0, 0] for w in omega])
-        assert_allclose(got[f"loop_{loop}"], direct, rtol=1e-8)
+    got = evaluate(problem, design, omega, exact_delays=False)
+    d = problem.drive_for(design)
+    for m, model in enumerate(models):
+        contact = model.contact(design.c)
+        plant = build_plant(structure, d, contact, PADS)
+        assert_allclose(got["compliance"][m], plant_compliance(plant, omega), rtol=1e-8)
+        for loop in ("velocity", "position"):
+            ref = loop_transfer(structure, d, contact, PADS, loop)
+            assert_allclose(got[f"loop_{loop}"][m], _direct(ref, omega), rtol=1e-8)
 
 
 def brute_force(problem, kp_values, c_values, omega_band, omega_loop):
@@ -72,9 +93,9 @@ def brute_force(problem, kp_values, c_values, omega_band, omega_loop):
         for c in c_values:
             d = Design(c=c, kv=x0.kv, kp=kp, ti=x0.ti)
             loops = loop(d)
-            if all(np.abs(1 + loops[f"loop_{k}"]).min() >= 1 / problem.requirements.ms_limit(k)
-                   for k in ("velocity", "position")):
-                value = np.abs(band(d)["compliance"]).max()
+            if all(np.abs(1 + loops[f"loop_{k}"][0]).min()
+                   >= 1 / problem.requirements.ms_limit(k) for k in ("velocity", "position")):
+                value = np.abs(band(d)["compliance"][0]).max()
                 if value < best[0]:
                     best = (value, d)
     return best
@@ -82,7 +103,9 @@ def brute_force(problem, kp_values, c_values, omega_band, omega_loop):
 
 def test_casadi_is_at_least_as_good_as_brute_force():
     structure, drive = small_axis(), small_drive()
-    req = Requirements(ms_velocity_max=1.5, ms_position_max=1.4)
+    # the brute force knows only the Ms limits: the loop-quality rows are switched off
+    req = Requirements(ms_velocity_max=1.5, ms_position_max=1.4, bandwidth_ratio_min=0,
+                       current_bandwidth_ratio_min=0, ti_bandwidth_min=0, ti_bandwidth_max=0)
     problem = TuningProblem(structure, PADS, c=5e4, drive=drive, free=("c", "kp"),
                             requirements=req, bounds={"c": (1e3, 2e6), "kp": (0.3, 30.0)})
     result = tune(problem, starts=3)
@@ -92,7 +115,7 @@ def test_casadi_is_at_least_as_good_as_brute_force():
     value, design = brute_force(problem, np.geomspace(0.3, 30.0, 41), np.geomspace(1e3, 2e6, 41),
                                 omega_band, omega_loop)
     assert design is not None
-    tuned = np.abs(ResponseModel(problem, omega_band)(result.design)["compliance"]).max()
+    tuned = np.abs(ResponseModel(problem, omega_band)(result.design)["compliance"][0]).max()
     assert tuned <= value * (1 + 1e-6)
     # and the brute-force optimum lies next to the casadi one (same basin, not a lucky grid)
     assert abs(math.log(design.c / result.design.c)) < math.log(2e6 / 1e3) / 40 * 1.5
@@ -146,51 +169,98 @@ def test_requirements_margins_tighten_ms():
     assert req.ms_limit("velocity") == pytest.approx(1.0 / (2 * math.sin(math.radians(22.5))))
 
 
-@pytest.mark.parametrize("active", ["objective and peak", "chatter", "Ms loops", "kv_min"])
+def _numpy_rows(problem, loop_model, d, gates, current_bw):
+    """The NLP's loop rows restated in numpy from the module docstring of tuning.nlp (the
+    gated rows with their logistic gates), for every model: (rows, models, frequencies)."""
+    from servotune.tuning.nlp import GATE_SHARPNESS
+
+    def sig(y):
+        return 1.0 / (1.0 + np.exp(-GATE_SHARPNESS * y))
+
+    req = problem.requirements
+    res = loop_model(d)
+    lv, lp = res["loop_velocity"], res["loop_position"]
+    lw = np.log(loop_model.omega)[None, :]
+    lv2 = np.abs(lv) ** 2
+    tv2 = lv2 / np.abs(1 + lv) ** 2
+    on_h, e_h, on_lo, e_lo, on_hi, e_hi, on_i, e_i = (gates[:, k][:, None] for k in range(8))
+    return np.array([
+        np.abs(1 + lv) ** 2 * req.ms_limit("velocity") ** 2,
+        np.abs(1 + lp) ** 2 * req.ms_limit("position") ** 2,
+        (tv2 - 0.5) / (tv2 + 0.5) + sig(lw - e_h - np.log(d.kv)) + 2 * (1 - on_h),
+        (tv2 - 0.5) / (tv2 + 0.5) + sig(lw - e_lo + np.log(d.ti)) + 2 * (1 - on_lo),
+        (0.5 - tv2) / (0.5 + tv2) + sig(e_hi - np.log(d.ti) - lw)
+        + sig(lw - e_hi + np.log(d.ti) - np.log(1.25)) + 2 * (1 - on_hi),
+        (0.5 - tv2) / (0.5 + tv2) + sig(e_i - lw) + sig(lw - e_i - np.log(1.25))
+        + 2 * (1 - on_i)])
+
+
+@pytest.mark.parametrize("active", ["objective and peak", "chatter", "Ms loops", "gated loops",
+                                    "kv_min and thrust"])
 def test_hessian_given_to_ipopt_matches_finite_differences_of_the_port_model(active):
     # The Hessian of the Lagrangian IPOPT receives is assembled from per-frequency kernel
-    # Hessians (chain rule through the log variables, the epigraph t, the tracking term, kv_min);
-    # check it against central differences of the same Lagrangian evaluated with numpy
-    # (ResponseModel), one constraint group at a time so each is seen at its own scale.
-    from servotune.tuning.solve import _Kernels, _Solver
+    # Hessians (chain rule through the log variables, the epigraphs, the tracking term, the
+    # thrust and kv_min rows); check it against central differences of the same Lagrangian
+    # evaluated with numpy (ResponseModel and the rows restated above), one constraint group at
+    # a time so each is seen at its own scale, with two regime models.
+    from servotune.friction import LuGreParameters
+    from servotune.regimes import Operation, RegimeModel
+    from servotune.thrust import ThrustBudget
+    from servotune.tuning.nlp import Kernels, Solver, gate_parameters
 
     structure, drive = small_axis(), small_drive()
     req = Requirements(ms_velocity_max=1.6, ms_position_max=1.4, kv_min=5.0)
+    p = LuGreParameters(fc=300.0, fs=600.0, vs=0.01, delta=1.0, sigma0=1e9, sigma1=2e6,
+                        sigma2=2e3)
+    models = (RegimeModel("standing", "presliding", p),
+              RegimeModel("feeding 30 mm/s", "sliding", p, speed=0.03))
+    budget = ThrustBudget(4e4, 1.5e4, 0.2, 1100.0, p,
+                          Operation(feed_speeds=(0.03,), rapid_speed=0.5, acceleration=2.0))
     problem = TuningProblem(structure, PADS, c=5e4, drive=drive, free=("c", "kv", "kp", "ti"),
-                            requirements=req, weights=(0.6, 0.4),
-                            chatter=ChatterTarget(kt=6e8, mu=0.5))
+                            requirements=req, weights=(0.6, 0.4), regimes=models,
+                            thrust=budget, chatter=ChatterTarget(kt=6e8, mu=0.5))
     x0 = problem.initial_design()
     band_model = ResponseModel(problem, np.geomspace(*req.band, 7))
     loop_model = ResponseModel(problem, np.geomspace(2 * np.pi * 20, 2 * np.pi * 2000, 9))
     h0 = float(np.abs(band_model(x0)["compliance"]).max())
     s0 = 1e-7
-    solver = _Solver(problem, _Kernels(problem, h0, s0), 7, 9)
-    params = np.concatenate([band_model.data.rows().ravel(order="F"),
-                             loop_model.data.rows().ravel(order="F")])
+    current_bw = 2 * np.pi * 700.0
+    gates = gate_parameters(problem, np.array([1.3, 1.1]), current_bw)
+    solver = Solver(problem, Kernels(problem, h0, s0), 7, 9)
+    params = np.concatenate([band_model.data.rows(models=[0, 1]).ravel(order="F"),
+                             loop_model.data.rows(gates).ravel(order="F")])
     groups = np.array(solver.groups)
     rng = np.random.default_rng(7)
     lam_g = rng.uniform(0.2, 1.0, groups.size)
     lam_f = 0.8 if active == "objective and peak" else 0.0
-    keep = {"objective and peak": ["compliance peak"], "chatter": ["chatter"],
-            "Ms loops": ["Ms velocity loop", "Ms position loop"], "kv_min": ["kv_min"]}[active]
+    keep = {"objective and peak": ["compliance peak", "worst peak"], "chatter": ["chatter"],
+            "Ms loops": ["Ms velocity loop", "Ms position loop"],
+            "gated loops": ["loop hierarchy", "Ti bandwidth min", "Ti bandwidth max",
+                            "current loop above"],
+            "kv_min and thrust": ["kv_min", "thrust: rapid traverse",
+                                  "thrust: feeding 30 mm/s"]}[active]
     lam_g[~np.isin(groups, keep)] = 0.0
-    ms = [req.ms_limit("velocity"), req.ms_limit("position")]
+    assert set(keep) <= set(groups)
 
     def lagrangian(x):
         d = Design(**{v: getattr(x0, v) * math.exp(x[i]) for i, v in enumerate(problem.free)})
-        t, q = x[4], x[5]
-        loops = loop_model(d)
+        t, tm, q = x[4], x[5:7], x[7]
         h = band_model(d)["compliance"]
+        rows = _numpy_rows(problem, loop_model, d, gates, current_bw)
+        thrust = [(fixed + d.c * speed) / usable
+                  for fixed, speed, usable, _ in budget.linear_form() if speed > 0]
         g = np.concatenate([
-            np.abs(h) ** 2 / h0**2 - t**2,
-            0.5 * h.real / s0 + q,
-            ms[0] ** 2 * np.abs(1 + loops["loop_velocity"]) ** 2,
-            ms[1] ** 2 * np.abs(1 + loops["loop_position"]) ** 2,
-            [d.kv - req.kv_min]])
-        f = 0.6 * t + 0.4 * q + problem.tracking_weight * x0.kv / d.kv
+            (np.abs(h) ** 2 / h0**2 - tm[:, None] ** 2).ravel(),
+            (0.5 * h.real / s0 + q).ravel(),
+            t - tm,
+            *[r.ravel() for r in rows],
+            thrust, [d.kv / req.kv_min]])
+        c_lo, span = problem.c_cost
+        f = (0.6 * (t + problem.mean_weight * tm.mean()) + 0.4 * q
+             + problem.tracking_weight * x0.kv / d.kv + problem.c_cost_weight * (d.c - c_lo) / span)
         return lam_f * f + lam_g @ g
 
-    x = np.array([0.3, -0.2, 0.1, 0.4, 0.9, 0.0])
+    x = np.array([0.3, -0.2, 0.1, 0.4, 0.9, 0.8, 0.85, 0.0])
     step = 1e-4
     n = x.size
     fd = np.zeros((n, n))

@@ -302,13 +302,20 @@ back_emf_constant = 1.5         # [V s/rad]; 470 V at 3000 rpm, within a 600 V D
 resistance = 0.25               # [ohm]
 inductance = 4.0e-3             # [H]; electrical time constant L/R = 16 ms
 rotor_inertia = {j_rotor}       # [kg m^2], rotor + encoder (already in the structure)
-torque_max = 36.0               # [N m]
-speed_max_rpm = 3000.0
+torque_peak = 90.0              # [N m]: 60 A of the converter's peak current x kt (2.5 x stall)
+torque_continuous = 27.0        # [N m]: rated torque at 3000 rpm (36 N m at standstill)
+speed_max_rpm = 3000.0          # rapid traverse 3000 rpm x 1.59e-3 m/rad = 0.5 m/s = 30 m/min
 
 [drive.transmission]
 ratio = {ratio:.6e}             # slide travel per motor rotation [m/rad] = lead/(2 pi)/belt ratio
 lead = {lead}                   # ball-screw lead [m]
 belt_ratio = {belt_ratio}       # motor turns per screw turn
+
+[drive.sampling]                # a current industrial servo drive (SINAMICS S120 class)
+current_period = 125.0e-6       # [s] current controller
+velocity_period = 125.0e-6      # [s] speed controller (speed measured from the encoder)
+position_period = 1.0e-3        # [s] position controller
+computation_delay = 1.0         # [sample periods] from sampling to applying the output
 
 [drive.current_loop]            # PI, technical optimum: zero on the electrical pole
 kp = 20.0                       # [V/A] = L * 2 pi * 800 Hz current-loop bandwidth
@@ -331,6 +338,11 @@ kn = 0.6e9                      # normal (radial) cutting coefficient [N/m^2]
 radial_immersion = 0.5          # a/D
 milling = "down"
 speed_rpm = [1000.0, 6000.0]
+
+[operation]
+acceleration = 1.0              # [m/s^2] of rapid moves (0.1 g for a 7.5 t slide and work piece)
+# feed speeds: from [cutting], feed_per_tooth x teeth x speed_rpm = 6.7 ... 40 mm/s
+# rapid speed: from speed_max_rpm, 0.5 m/s
 
 [requirements]
 ms_velocity_max = 2.0

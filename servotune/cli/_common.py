@@ -24,7 +24,7 @@ def add_output_options(parser, default_out: str | None = "out") -> None:
 
 
 def to_jsonable(obj):
-    """Numpy scalars and arrays to plain Python; non-finite floats refused."""
+    """Numpy scalars and arrays to plain Python; non-finite floats as None (null)."""
     if isinstance(obj, dict):
         return {str(k): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -34,7 +34,7 @@ def to_jsonable(obj):
     if isinstance(obj, np.generic):
         return to_jsonable(obj.item())
     if isinstance(obj, float) and not math.isfinite(obj):
-        raise ValueError(f"refusing to print a non-finite result ({obj})")
+        return None  # JSON has no inf/nan: null (e.g. no gain crossover, an unstable loop)
     if isinstance(obj, Path):
         return str(obj)
     return obj
@@ -67,6 +67,15 @@ def add_contact_options(parser, default: str = "viscous") -> None:
                              "locked-pad work-piece resonance is not guessed; give it)")
     parser.add_argument("--speed", type=float, default=None,
                         help="sliding speed [m/s] for --contact sliding")
+    parser.add_argument("--continuous", action="store_true",
+                        help="the drive in continuous time, as the paper models it (no "
+                             "sampling, no delays) instead of the digital drive of "
+                             "[drive.sampling]")
+
+
+def axis_from_args(axis, args):
+    """The axis with the drive the options ask for (``--continuous``: the paper's model)."""
+    return axis.with_continuous_drive() if getattr(args, "continuous", False) else axis
 
 
 def contact_from_args(axis, args):

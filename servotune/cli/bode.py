@@ -4,7 +4,13 @@ from __future__ import annotations
 
 from .. import analysis, report
 from ..axis import load_axis
-from ._common import add_contact_options, add_output_options, contact_from_args, print_json
+from ._common import (
+    add_contact_options,
+    add_output_options,
+    axis_from_args,
+    contact_from_args,
+    print_json,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -23,7 +29,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    axis = load_axis(args.axis)
+    axis = axis_from_args(load_axis(args.axis), args)
     contact = contact_from_args(axis, args)
     figure = args.out / f"bode_{axis.name}.png"
     report.check_writable([figure], args.force)

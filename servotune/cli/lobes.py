@@ -5,7 +5,13 @@ from __future__ import annotations
 import warnings
 
 from .. import chatter, plots, report
-from ._common import add_contact_options, add_output_options, contact_from_args, print_json
+from ._common import (
+    add_contact_options,
+    add_output_options,
+    axis_from_args,
+    contact_from_args,
+    print_json,
+)
 
 BENCHMARK = {"teeth": 2, "kt": 6e8, "kn": 2e8, "immersion": 1.0, "milling": "down"}
 
@@ -81,7 +87,7 @@ def _compliance(args):
         from ..axis import load_axis
         from ..frequency import require_stable
 
-        axis = load_axis(args.axis)
+        axis = axis_from_args(load_axis(args.axis), args)
         contact = contact_from_args(axis, args)
         plant = axis_plant(axis, contact, controlled=axis.drive is not None)
         require_stable(plant)

@@ -24,9 +24,10 @@ def default_axis() -> Path:
     return Path(__file__).resolve().parents[2] / "models" / "paper_x_axis"
 
 
-def load_setup(path):
+def load_setup(path, continuous: bool = True):
     """Load an axis description (``servotune.axis.load_axis``) and turn it into the set-up of
-    the simulation."""
+    the simulation; ``continuous`` takes the drive in continuous time, as the paper models it
+    (sec 3), instead of the digital drive of ``[drive.sampling]``."""
     try:
         from ..axis import load_axis
     except ImportError as exc:  # pragma: no cover - until servotune.axis is merged
@@ -36,7 +37,8 @@ def load_setup(path):
     if not (path / "axis.toml").is_file():
         raise FileNotFoundError(f"{path} has no axis.toml; give an axis folder such as "
                                 f"{default_axis()}")
-    return axis_setup(load_axis(path))
+    axis = load_axis(path)
+    return axis_setup(axis.with_continuous_drive() if continuous else axis)
 
 
 def add_parser(subparsers) -> None:

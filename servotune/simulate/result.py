@@ -147,8 +147,9 @@ class SimulationResult:
     friction : str
         Name of the friction law.
     scenario : str
-    sweep : tuple or None
-        (f_start_hz, f_end_hz, t_start, t_end, force amplitude [N]) of a force sweep.
+    sweep : tuple, SweepPlan or None
+        (f_start_hz, f_end_hz, t_start, t_end, force amplitude [N]) of a linear force sweep,
+        or the :class:`~servotune.simulate.scenario.SweepPlan` of a variable-rate one.
     stats : dict
         Integrator statistics (step, steps, substeps, Newton iterations, wall time, ...).
     complete : bool
@@ -165,7 +166,7 @@ class SimulationResult:
     pads: tuple
     friction: str
     scenario: str
-    sweep: tuple | None = None
+    sweep: object = None
     stats: dict = field(default_factory=dict)
     complete: bool = True
 
@@ -214,18 +215,24 @@ class SimulationResult:
         """
         if self.sweep is None:
             raise ValueError("the scenario has no force sweep (use scenario.sine_sweep)")
-        f0, f1, ts, te, amp = self.sweep
         y = self[output]
         t = self.t
-        rate = (f1 - f0) / (te - ts)
-        # cycle boundaries: phase = 2 pi k
-        t_last = min(te, t[-1])
-        phase_end = f0 * (t_last - ts) + 0.5 * rate * (t_last - ts) ** 2
-        k = np.arange(0, math.floor(phase_end) + 1)
-        if rate != 0:
-            tk = ts + (-f0 + np.sqrt(f0 * f0 + 2 * rate * k)) / rate
+        plan = self.sweep if hasattr(self.sweep, "cycle_times") else None
+        if plan is not None:
+            amp = plan.amplitude
+            t_last = min(float(plan.t[-1]), t[-1])
+            tk = plan.cycle_times(t_last)
         else:
-            tk = ts + k / f0
+            f0, f1, ts, te, amp = self.sweep
+            rate = (f1 - f0) / (te - ts)
+            # cycle boundaries: phase = 2 pi k
+            t_last = min(te, t[-1])
+            phase_end = f0 * (t_last - ts) + 0.5 * rate * (t_last - ts) ** 2
+            k = np.arange(0, math.floor(phase_end) + 1)
+            if rate != 0:
+                tk = ts + (-f0 + np.sqrt(f0 * f0 + 2 * rate * k)) / rate
+            else:
+                tk = ts + k / f0
         idx = np.searchsorted(t, tk)
         freq, tm, amps = [], [], []
         for a, b, ta, tb in zip(idx[:-1], idx[1:], tk[:-1], tk[1:], strict=True):
@@ -235,11 +242,16 @@ class SimulationResult:
                 raise ValueError(f"only {b - a} samples in the cycle at {ta:.3f} s; record "
                                  "more densely (record_step)")
             tt = t[a:b]
-            ph = 2 * math.pi * (f0 * (tt - ts) + 0.5 * rate * (tt - ts) ** 2)
             mid = 0.5 * (ta + tb)
+            if plan is not None:
+                ph = plan.phase_at(tt)
+                f_mid = float(plan.frequency_at(mid))
+            else:
+                ph = 2 * math.pi * (f0 * (tt - ts) + 0.5 * rate * (tt - ts) ** 2)
+                f_mid = f0 + rate * (mid - ts)
             basis = np.column_stack([np.ones_like(tt), tt - mid, np.cos(ph), np.sin(ph)])
             coef = np.linalg.lstsq(basis, y[a:b], rcond=None)[0]
-            freq.append(2 * math.pi * (f0 + rate * (mid - ts)))
+            freq.append(2 * math.pi * f_mid)
             tm.append(mid)
             amps.append(math.hypot(coef[2], coef[3]) / amp)
         freq, tm, amps = np.array(freq), np.array(tm), np.array(amps)

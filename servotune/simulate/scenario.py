@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["Scenario", "sine_sweep", "constant_speed", "point_to_point", "sinusoid", "circle",
-           "custom", "sweep_phase", "sweep_frequency"]
+           "custom", "sweep_phase", "sweep_frequency", "SweepPlan", "sweep_plan",
+           "planned_sweep"]
 
 HZ = 1.0 / (2.0 * math.pi)
 DEFAULT_START = 0.2   # [s] smooth start to a constant speed
@@ -172,6 +173,119 @@ def sine_sweep(force_pp: float, f_start_hz: float = 10.0, f_end_hz: float = 100.
              f"p-p, {speed * 1e3:g} mm/s")
     return Scenario(duration=duration, motion=motion, forces={dof: force}, speed=float(speed),
                     name=label, sweep=(f_start_hz, f_end_hz, 0.0, duration, amplitude))
+
+
+@dataclass(frozen=True, eq=False)
+class SweepPlan:
+    """A sine sweep with a rate that varies with frequency, as a phase table.
+
+    ``phase`` [rad] on the times ``t`` [s] from 0 to ``duration``; the instantaneous frequency
+    is ``frequency_hz``. :meth:`servotune.simulate.SimulationResult.sweep_envelope` reads the
+    cycle boundaries (phase = 2 pi k) from it.
+    """
+
+    t: np.ndarray
+    phase: np.ndarray
+    frequency_hz: np.ndarray
+    amplitude: float
+    slow: tuple = ()   # the (f_low_hz, f_high_hz) windows swept slowly
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def f_start_hz(self) -> float:
+        return float(self.frequency_hz[0])
+
+    @property
+    def f_end_hz(self) -> float:
+        return float(self.frequency_hz[-1])
+
+    def phase_at(self, t) -> np.ndarray:
+        return np.interp(np.asarray(t, dtype=float), self.t, self.phase)
+
+    def frequency_at(self, t) -> np.ndarray:
+        """Instantaneous frequency [Hz]."""
+        return np.interp(np.asarray(t, dtype=float), self.t, self.frequency_hz)
+
+    def cycle_times(self, t_end: float) -> np.ndarray:
+        """Times where the phase passes 2 pi k, up to ``t_end``."""
+        end = float(np.interp(t_end, self.t, self.phase))
+        k = np.arange(0, math.floor(end / (2 * math.pi)) + 1)
+        return np.interp(2 * math.pi * k, self.phase, self.t)
+
+    def in_slow_window(self, f_hz: float) -> bool:
+        return any(lo <= f_hz <= hi for lo, hi in self.slow)
+
+
+def sweep_plan(f_start_hz: float, f_end_hz: float, amplitude: float, resonances=(),
+               base_damping: float = 0.1, time_constants: float = 4.0,
+               window: float = 0.15, step: float = 5e-5) -> SweepPlan:
+    """A sweep that passes every resonance slowly enough to show its steady-state peak.
+
+    A resonance of frequency f and damping ratio zeta has a half-power band 2 zeta f and a
+    time constant 1/(2 pi zeta f); a sweep shows its steady amplitude when it takes several
+    time constants to cross that band, i.e. at a rate ``df/dt <= 4 pi zeta^2 f^2 / N``
+    (N = ``time_constants``). The rate is set so everywhere for ``base_damping`` (any
+    resonance at least that damped is shown right), and within ``window`` (relative) of each
+    expected resonance ``(f_hz, zeta)`` for its own damping.
+
+    Examples
+    --------
+    A 3 % resonance at 50 Hz is crossed at 4 pi zeta^2 f^2 / 4 = 7.1 Hz/s:
+
+    >>> plan = sweep_plan(10.0, 100.0, 50.0, resonances=[(50.0, 0.03)])
+    >>> i = int(np.argmin(np.abs(plan.frequency_hz - 50.0)))
+    >>> rate = np.gradient(plan.frequency_hz, plan.t)[i]
+    >>> round(float(rate), 2), round(4 * math.pi * 0.03**2 * 50**2 / 4, 2)
+    (7.07, 7.07)
+    """
+    f0, f1 = _positive("f_start_hz", f_start_hz), _positive("f_end_hz", f_end_hz)
+    if not f1 > f0:
+        raise ValueError(f"the sweep needs f_start_hz < f_end_hz, got {f0:g}, {f1:g}")
+    f = np.geomspace(f0, f1, 4000)
+    rate = 4 * math.pi * base_damping**2 * f**2 / time_constants
+    slow = []
+    for fr, zeta in resonances:
+        if not (math.isfinite(fr) and fr > 0 and math.isfinite(zeta) and zeta > 0):
+            continue
+        lo, hi = fr * (1 - window - 3 * zeta), fr * (1 + window + 3 * zeta)
+        sel = (f >= lo) & (f <= hi)
+        rate[sel] = np.minimum(rate[sel], 4 * math.pi * zeta**2 * f[sel] ** 2 / time_constants)
+        if sel.any():
+            slow.append((max(lo, f0), min(hi, f1)))
+    # time to each frequency: dt = df / rate (trapezoid in f), then phase = 2 pi int f dt
+    t_f = np.concatenate([[0.0], np.cumsum(0.5 * (1 / rate[1:] + 1 / rate[:-1]) * np.diff(f))])
+    t = np.arange(0.0, t_f[-1] + step, step)
+    t[-1] = min(t[-1], t_f[-1])
+    freq = np.interp(t, t_f, f)
+    phase = np.concatenate([[0.0], np.cumsum(np.pi * (freq[1:] + freq[:-1]) * np.diff(t))])
+    return SweepPlan(t, phase, freq, float(amplitude), tuple(slow))
+
+
+def planned_sweep(force_pp: float, plan: SweepPlan, speed: float = 0.0, dof: str = "wp.x",
+                  settle: float = 0.0, ring_down: float = 0.0,
+                  start: float = DEFAULT_START) -> Scenario:
+    """A force sweep at the work piece following a :class:`SweepPlan`, standing still or moving
+    at ``speed`` [m/s]; ``settle`` seconds of motion before the sweep (the slide reaches its
+    speed) and ``ring_down`` seconds without force after it (to see the response decay)."""
+    force_pp = _positive("force_pp", force_pp)
+    amplitude = 0.5 * force_pp
+    t0 = _positive("settle", settle, True)
+    plan = SweepPlan(plan.t + t0, plan.phase, plan.frequency_hz, amplitude, plan.slow)
+    t_end = float(plan.t[-1])
+
+    def force(t):
+        t = np.asarray(t, dtype=float)
+        on = (t >= t0) & (t <= t_end)
+        return np.where(on, amplitude * np.sin(plan.phase_at(t)), 0.0)
+
+    motion = _smooth_start(float(speed), _positive("start", start, True)) if speed else None
+    label = (f"sine sweep {plan.f_start_hz:g}-{plan.f_end_hz:g} Hz in "
+             f"{plan.duration - t0:.3g} s, {force_pp:g} N p-p, {speed * 1e3:g} mm/s")
+    return Scenario(duration=t_end + _positive("ring_down", ring_down, True), motion=motion,
+                    forces={dof: force}, speed=float(speed), name=label, sweep=plan)
 
 
 def constant_speed(speed: float, duration: float, start: float = DEFAULT_START) -> Scenario:

@@ -58,16 +58,21 @@ from .ports import ResponseModel, evaluate
 from .problem import (
     ChatterTarget,
     Design,
+    NoStableStartError,
     RequirementsNotMetError,
     TuningDidNotConvergeError,
     TuningProblem,
 )
-from .solve import Performance, TuningResult, tune, verify
+from .solve import TuningResult, tune
+from .verify import ModelPerformance, Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = [
     "ChatterTarget",
     "Design",
+    "ModelPerformance",
+    "NoStableStartError",
     "Performance",
+    "RequirementCheck",
     "Requirements",
     "RequirementsNotMetError",
     "TuningDidNotConvergeError",
@@ -75,6 +80,7 @@ __all__ = [
     "TuningProblem",
     "TuningResult",
     "evaluate",
+    "requirement_checks",
     "tune",
     "verify",
 ]

@@ -6,11 +6,13 @@ import math
 from dataclasses import dataclass, field, replace
 
 from ..drive import Drive, PIController
+from ..regimes import RegimeModel
 from ..requirements import Requirements
 from ..structure.model import ModalModel
+from ..thrust import ThrustBudget
 
-__all__ = ["VARIABLES", "ChatterTarget", "Design", "RequirementsNotMetError",
-           "TuningDidNotConvergeError", "TuningProblem"]
+__all__ = ["VARIABLES", "ChatterTarget", "Design", "NoStableStartError",
+           "RequirementsNotMetError", "TuningDidNotConvergeError", "TuningProblem"]
 
 VARIABLES = ("c", "kv", "kp", "ti")
 HZ = 1.0 / (2.0 * math.pi)
@@ -18,6 +20,11 @@ HZ = 1.0 / (2.0 * math.pi)
 
 class RequirementsNotMetError(ValueError):
     """The requirements cannot be met within the bounds (names the binding constraint)."""
+
+
+class NoStableStartError(ValueError):
+    """No design near the initial one keeps every regime model stable: the tuning has nowhere to
+    start (the message names the unstable models and what to change)."""
 
 
 class TuningDidNotConvergeError(RuntimeError):
@@ -86,12 +93,41 @@ class ChatterTarget:
 @dataclass(frozen=True)
 class Design:
     """Values of the design variables (SI): C [N s/m] (axis total), Kv [1/s], Kp [N m s/rad],
-    Ti [s]. Variables without a drive may be None."""
+    Ti [s]. Variables without a drive may be None.
+
+    Raises
+    ------
+    ValueError
+        A value that is not a positive finite number (Ti may be inf: no integral action).
+
+    Examples
+    --------
+    >>> Design(c=-1.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: Design.c must be a finite number > 0 (N s/m), got -1.0
+    """
 
     c: float
     kv: float | None = None
     kp: float | None = None
     ti: float | None = None
+
+    def __post_init__(self) -> None:
+        units = {"c": "N s/m", "kv": "1/s", "kp": "N m s/rad", "ti": "s"}
+        for name in VARIABLES:
+            value = getattr(self, name)
+            if value is None and name != "c":
+                continue
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(f"Design.{name} must be a number, got {value!r}") from None
+            ok = value > 0 and (math.isfinite(value) or (name == "ti" and value == math.inf))
+            if not ok:
+                raise ValueError(f"Design.{name} must be a finite number > 0 ({units[name]}), "
+                                 f"got {value!r}")
+            object.__setattr__(self, name, value)
 
     def to_dict(self) -> dict:
         return {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
@@ -122,8 +158,20 @@ class TuningProblem:
         Weight of Kv0/Kv in the objective when Kv is free: the compliance barely depends on
         Kv, so without it Kv would be left anywhere the constraints allow; with it Kv goes as
         high as the position-loop Ms allows (tracking accuracy grows with Kv).
-    contact_stiffness : float
-        Fixed total contact stiffness at the pads [N/m] (0 for purely viscous pads).
+    regimes : tuple of RegimeModel
+        The linear guide-way models the design must hold in (default: the viscous pads of the
+        paper's sec 4.1). The compliance objective is the worst over the models; every
+        constraint holds in every model.
+    thrust : ThrustBudget, optional
+        The drive's thrust budget (a constraint on C).
+    mean_weight : float
+        Weight of the mean compliance peak over the models beside the worst (so that the
+        regimes that do not bind still improve).
+    c_cost_weight : float
+        With a thrust budget, the weight of the added damping (C above its lower bound, over
+        the range the budget allows) in the objective: damping costs thrust and hardware, so
+        it is added only where it buys compliance (the objective is flat in C where it does
+        not, and C would otherwise be left anywhere).
     force : str
         Work-piece DOF where the cutting force acts and the compliance is taken.
     n_grid : int
@@ -140,11 +188,26 @@ class TuningProblem:
     chatter: ChatterTarget | None = None
     weights: tuple[float, float] = (1.0, 0.0)
     tracking_weight: float = 0.05
-    contact_stiffness: float = 0.0
+    regimes: tuple = (RegimeModel("viscous", "viscous"),)
+    thrust: ThrustBudget | None = None
+    mean_weight: float = 0.1
+    c_cost_weight: float = 0.02
     force: str = "wp.x"
     n_grid: int = 60
 
     def __post_init__(self) -> None:
+        regimes = tuple(self.regimes)
+        if not regimes or not all(isinstance(m, RegimeModel) for m in regimes):
+            raise ValueError("regimes must be a non-empty sequence of RegimeModel")
+        if not tuple(self.pads) and any(m.kind != "viscous" for m in regimes):
+            raise ValueError("friction regime models need the pad DOFs (pads=...)")
+        object.__setattr__(self, "regimes", regimes)
+        if self.thrust is not None and not isinstance(self.thrust, ThrustBudget):
+            raise ValueError("thrust must be a ThrustBudget or None")
+        for name in ("mean_weight", "c_cost_weight"):
+            value = getattr(self, name)
+            if not (value >= 0 and math.isfinite(value)):
+                raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
         pads = tuple(self.pads)
         self.structure.index([*list(pads), self.force])
         object.__setattr__(self, "pads", pads)
@@ -180,6 +243,28 @@ class TuningProblem:
                                  f"({lo!r}, {hi!r}) with initial {value!r}")
             checked[name] = (float(lo), float(hi))
         object.__setattr__(self, "bounds", checked)
+
+    @property
+    def cutting_models(self) -> tuple[int, ...]:
+        """Indices of the models whose compliance is judged (the cutting regimes)."""
+        return tuple(i for i, m in enumerate(self.regimes) if m.cutting)
+
+    @property
+    def moving_models(self) -> tuple[int, ...]:
+        """Indices of the models in which the axis moves (sliding or viscous pads): there the
+        loop hierarchy and the integral time are judged (with the pads stuck the slide does
+        not follow the motor and loop bandwidths mean nothing)."""
+        return tuple(i for i, m in enumerate(self.regimes) if m.kind in ("sliding", "viscous"))
+
+    @property
+    def c_cost(self) -> tuple[float, float] | None:
+        """(C_low, span) of the cost of added damping, or None when C costs nothing (no thrust
+        budget, or C not free)."""
+        if self.thrust is None or "c" not in self.free or not self.c_cost_weight:
+            return None
+        lo, hi = self.bounds["c"]
+        top = min(hi, self.thrust.c_max())
+        return lo, max(top - lo, 0.01 * lo)
 
     def initial_design(self) -> Design:
         d = self.drive

@@ -1,0 +1,316 @@
+"""Operating regimes of a feed axis and the linear guide-way model of each.
+
+Guide-way friction makes the axis a different linear system in each way it works (the paper's
+Table 3 and its remarks A-C):
+
+* **standing** (cutting with the axis at rest, or reversing): the pads stick. The friction is
+  the LuGre presliding contact, a spring sigma0 with a damper sigma1 (plus the viscous part C),
+  and at the vibration amplitude A the cutting forces give, the LuGre describing function
+  (Keq, Ceq at A; Eq 8-10 of the paper, computed for the whole LuGre element);
+* **feeding** at a speed v (cutting while the axis moves): the pads slide. The friction is LuGre
+  linearised about steady sliding at v: the slope of the Stribeck curve plus the viscous part,
+  through the bristle lag. Below the Stribeck speed the slope is negative and may destabilise
+  the axis (stick-slip);
+* **viscous**: the paper's viscous-only model of sec 4.1 (the pads as a damper C alone), used for
+  an axis without a drive (the two-mass analysis).
+
+In every model the design's guide-way damping C is the *total viscous part* of the friction: it
+takes the place of the LuGre sigma2 (a design with C above the identified sigma2 adds viscous
+damping, for example hydrostatic guides). A model's contact impedance at the pads is therefore
+``Z(jw) = Z_0(jw) + j w C`` with ``Z_0`` the friction model without its viscous part.
+
+Friction is never known exactly: :func:`friction_samples` gives the corners of a spread of the
+identified parameters (by default the spread the paper measured over six tests), each a further
+model of every regime.
+
+References
+----------
+G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
+sec 4.2, 5.3 (Table 3, remarks A-C).
+C. Canudas de Wit et al., "A new model for control of systems with friction", IEEE Trans.
+Automatic Control 40(3) (1995) 419-425 (LuGre; linearisations).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import control
+import numpy as np
+
+from .friction.equivalent import describing_function
+from .friction.lugre import LuGreParameters, sliding_linearisation, stribeck_curve
+from .plant import Contact
+
+__all__ = [
+    "REGIME_KINDS",
+    "Operation",
+    "RegimeModel",
+    "friction_samples",
+    "regime_models",
+    "stribeck_slope",
+]
+
+HZ = 1.0 / (2.0 * math.pi)
+REGIME_KINDS = ("presliding", "describing", "sliding", "viscous")
+
+
+def _finite_positive(owner: str, name: str, value) -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"{owner}.{name} must be finite and > 0, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class Operation:
+    """How the axis works: its cutting feeds, its rapid traverse, its acceleration (SI).
+
+    Parameters
+    ----------
+    feed_speeds : tuple of float
+        Slide speeds while cutting [m/s] (each a *feeding* regime).
+    rapid_speed : float, optional
+        Rapid-traverse speed [m/s] (for the peak-thrust budget).
+    acceleration : float
+        Acceleration of rapid moves [m/s^2].
+    process_force_pp : float, optional
+        Peak-to-peak cutting force at the work piece in the flexible direction [N], the force
+        the standing regime is judged at (default: from ``[cutting]`` at the required depth).
+    feed_force : float
+        Mean cutting force against the feed [N] (a continuous load on the drive).
+    standing : bool
+        Whether the axis also cuts standing still (the standing regime).
+    defaults : tuple of str
+        Which values were defaulted and from what (shown to the user).
+    """
+
+    feed_speeds: tuple[float, ...] = ()
+    rapid_speed: float | None = None
+    acceleration: float = 1.0
+    process_force_pp: float | None = None
+    feed_force: float = 0.0
+    standing: bool = True
+    defaults: tuple[str, ...] = field(default=(), compare=False)
+
+    def __post_init__(self) -> None:
+        speeds = tuple(_finite_positive("Operation", "feed_speeds", v) for v in self.feed_speeds)
+        object.__setattr__(self, "feed_speeds", tuple(sorted(set(speeds))))
+        if self.rapid_speed is not None:
+            object.__setattr__(self, "rapid_speed",
+                               _finite_positive("Operation", "rapid_speed", self.rapid_speed))
+            if self.feed_speeds and max(self.feed_speeds) > self.rapid_speed:
+                raise ValueError(f"Operation.feed_speeds ({max(self.feed_speeds):g} m/s) exceed "
+                                 f"the rapid speed {self.rapid_speed:g} m/s")
+        object.__setattr__(self, "acceleration",
+                           _finite_positive("Operation", "acceleration", self.acceleration))
+        if self.process_force_pp is not None:
+            object.__setattr__(self, "process_force_pp", _finite_positive(
+                "Operation", "process_force_pp", self.process_force_pp))
+        force = float(self.feed_force)
+        if not (math.isfinite(force) and force >= 0.0):
+            raise ValueError(f"Operation.feed_force must be finite and >= 0 N, got {force!r}")
+        object.__setattr__(self, "feed_force", force)
+        if not self.standing and not self.feed_speeds:
+            raise ValueError("Operation: no regime left (standing = false and no feed_speeds)")
+
+    def to_dict(self) -> dict:
+        return {"feed_speeds": list(self.feed_speeds), "rapid_speed": self.rapid_speed,
+                "acceleration": self.acceleration, "process_force_pp": self.process_force_pp,
+                "feed_force": self.feed_force, "standing": self.standing,
+                "defaults": list(self.defaults)}
+
+
+def stribeck_slope(params: LuGreParameters, speed: float) -> float:
+    """dF/dv of the steady sliding friction at ``speed`` [N s/m], sigma2 included: negative
+    below the Stribeck speed where the friction falls faster than sigma2 rises."""
+    from .friction.lugre import steady_state_slope
+
+    return float(steady_state_slope(params, speed))
+
+
+@dataclass(frozen=True)
+class RegimeModel:
+    """One linear guide-way model of one operating regime.
+
+    Parameters
+    ----------
+    regime : str
+        The operating regime it belongs to (``"standing"``, ``"feeding 30 mm/s"``,
+        ``"viscous"``); a regime's claim is the worst of its models.
+    kind : {"presliding", "describing", "sliding", "viscous"}
+    friction : LuGreParameters, optional
+        The friction (axis totals) of the model; its sigma2 is replaced by the design's C.
+    speed : float
+        Sliding speed [m/s] (feeding models).
+    amplitude, frequency : float, optional
+        Pad vibration amplitude [m] and angular frequency [rad/s] of a describing-function
+        model.
+    sample : str
+        The friction sample (``"nominal"`` or a corner of the spread).
+    cutting : bool
+        Whether the axis cuts in this regime (its compliance is judged); False for a regime
+        that only moves the axis (rapid traverse), where only the loops are judged.
+    """
+
+    regime: str
+    kind: str
+    friction: LuGreParameters | None = None
+    speed: float = 0.0
+    amplitude: float | None = None
+    frequency: float | None = None
+    sample: str = "nominal"
+    cutting: bool = True
+    _keq_ceq: tuple = field(default=None, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.kind not in REGIME_KINDS:
+            raise ValueError(f"RegimeModel.kind must be one of {REGIME_KINDS}, got {self.kind!r}")
+        if self.kind != "viscous" and not isinstance(self.friction, LuGreParameters):
+            raise ValueError(f"a {self.kind} model needs the LuGre friction of the axis")
+        if self.kind == "sliding" and not (math.isfinite(self.speed) and self.speed > 0):
+            raise ValueError(f"a sliding model needs a speed > 0 m/s, got {self.speed!r}")
+        if self.kind == "describing":
+            for name in ("amplitude", "frequency"):
+                value = getattr(self, name)
+                if value is None or not (math.isfinite(value) and value > 0):
+                    raise ValueError(f"a describing-function model needs {name} > 0, got "
+                                     f"{value!r}")
+            base = dataclasses.replace(self.friction, sigma2=0.0)
+            ceq, keq = describing_function(base, self.amplitude, self.frequency)
+            object.__setattr__(self, "_keq_ceq", (float(keq), float(ceq)))
+
+    @property
+    def name(self) -> str:
+        """A readable name: regime, model and (when not nominal) friction sample."""
+        what = {"presliding": "presliding", "describing": "describing function",
+                "sliding": "sliding", "viscous": "viscous"}[self.kind]
+        text = f"{self.regime}: {what}"
+        if self.kind == "describing":
+            text += f" at {self.amplitude:.3g} m"
+        return text + ("" if self.sample == "nominal" else f" ({self.sample})")
+
+    def impedance(self, omega) -> np.ndarray:
+        """The contact impedance without the viscous part, Z_0(jw) [N/m] (axis total): the
+        pad force per pad displacement."""
+        s = 1j * np.asarray(omega, dtype=float)
+        p = self.friction
+        if self.kind == "viscous":
+            return np.zeros_like(s)
+        if self.kind == "presliding":
+            return p.sigma0 + s * p.sigma1
+        if self.kind == "describing":
+            keq, ceq = self._keq_ceq
+            return keq + s * ceq
+        sys = sliding_linearisation(dataclasses.replace(p, sigma2=0.0), self.speed)
+        a, b, c, d = (float(np.asarray(m).ravel()[0]) for m in (sys.A, sys.B, sys.C, sys.D))
+        return s * (c * b / (s - a) + d)
+
+    def contact(self, c: float) -> Contact:
+        """The python-control contact of the model with total viscous damping ``c`` [N s/m]."""
+        c = float(c)
+        if self.kind == "viscous":
+            return Contact.viscous(c)
+        p = self.friction
+        if self.kind == "presliding":
+            return Contact.stiction(p.sigma0, p.sigma1, c)
+        if self.kind == "describing":
+            keq, ceq = self._keq_ceq
+            element = control.ss([[0.0]], [[1.0]], [[keq]], [[ceq + c]])
+            return Contact("sliding", system=element,
+                           note=f"describing function at A = {self.amplitude:.3g} m, "
+                                f"{self.frequency * HZ:.1f} Hz: Keq = {keq:.3g} N/m, "
+                                f"Ceq = {ceq + c:.3g} N s/m")
+        return Contact.sliding(sliding_linearisation(dataclasses.replace(p, sigma2=c),
+                                                     self.speed), self.speed)
+
+    def with_amplitude(self, amplitude: float, frequency: float) -> RegimeModel:
+        """The describing-function model at another amplitude and frequency."""
+        return dataclasses.replace(self, amplitude=float(amplitude), frequency=float(frequency))
+
+    def slope(self) -> float | None:
+        """The sliding model's steady friction slope dF/dv with sigma2 = 0 [N s/m]."""
+        if self.kind != "sliding":
+            return None
+        return stribeck_slope(dataclasses.replace(self.friction, sigma2=0.0), self.speed)
+
+    def to_dict(self) -> dict:
+        out = {"regime": self.regime, "model": self.kind, "name": self.name,
+               "sample": self.sample, "speed_m_per_s": self.speed, "cutting": self.cutting}
+        if self.kind == "describing":
+            keq, ceq = self._keq_ceq
+            out.update(amplitude_m=self.amplitude, frequency_hz=self.frequency * HZ,
+                       keq=keq, ceq_without_c=ceq)
+        if self.kind == "sliding":
+            out["friction_slope_without_c"] = self.slope()
+            out["friction_level_n"] = float(stribeck_curve(self.friction, self.speed))
+        return out
+
+
+def friction_samples(params: LuGreParameters, spread: dict | None) -> list[tuple[str,
+                                                                                 LuGreParameters]]:
+    """The nominal friction and the corners of a spread.
+
+    ``spread`` maps parameter names to a relative spread: ``fc``, ``fs``, ``sigma1``: +-
+    fraction (0.3 = 30 %); ``sigma0``: a factor (3.0 = x/÷ 3). Each parameter gives a low and
+    a high sample, the others nominal (one-at-a-time corners: the extremes of a monotone
+    response; the corners of all combinations would grow as 2^n).
+    """
+    out = [("nominal", params)]
+    for name, value in (spread or {}).items():
+        if name not in ("fc", "fs", "sigma0", "sigma1"):
+            raise ValueError(f"friction spread of {name!r}: choose among fc, fs, sigma0, sigma1")
+        value = float(value)
+        base = getattr(params, name)
+        if name == "sigma0":
+            if not (math.isfinite(value) and value > 1.0):
+                raise ValueError(f"friction spread of sigma0 is a factor > 1, got {value!r}")
+            pairs = ((f"sigma0 / {value:g}", base / value), (f"sigma0 x {value:g}", base * value))
+        else:
+            if not (math.isfinite(value) and 0.0 < value < 1.0):
+                raise ValueError(f"friction spread of {name} is a fraction in (0, 1), got "
+                                 f"{value!r}")
+            pairs = ((f"{name} -{value:.0%}", base * (1 - value)),
+                     (f"{name} +{value:.0%}", base * (1 + value)))
+        for label, new in pairs:
+            changes = {name: new}
+            if name == "fc" and new > params.fs:
+                changes["fs"] = new
+            if name == "fs" and new < params.fc:
+                changes["fc"] = new
+            out.append((label, dataclasses.replace(params, **changes)))
+    return out
+
+
+def regime_models(friction: LuGreParameters | None, operation: Operation | None,
+                  amplitude: float | None = None, frequency: float | None = None,
+                  spread: dict | None = None, viscous_only: bool = False
+                  ) -> tuple[RegimeModel, ...]:
+    """The linear models of an axis' regimes.
+
+    Parameters
+    ----------
+    friction : LuGreParameters, optional
+        The axis' friction (None or ``viscous_only``: the viscous model alone).
+    operation : Operation
+    amplitude, frequency : float, optional
+        Pad vibration amplitude [m] and angular frequency [rad/s] at the process force; when
+        given, the standing regime gets the describing-function model there.
+    spread : dict, optional
+        Friction spread (see :func:`friction_samples`): further models of every regime.
+    """
+    if viscous_only or friction is None or operation is None:
+        return (RegimeModel("viscous", "viscous"),)
+    models = []
+    for label, params in friction_samples(friction, spread):
+        if operation.standing:
+            models.append(RegimeModel("standing", "presliding", params, sample=label))
+            if amplitude is not None and frequency is not None:
+                models.append(RegimeModel("standing", "describing", params, amplitude=amplitude,
+                                          frequency=frequency, sample=label))
+        for v in operation.feed_speeds:
+            models.append(RegimeModel(f"feeding {v * 1e3:.3g} mm/s", "sliding", params, speed=v,
+                                      sample=label))
+    return tuple(models)

@@ -1,0 +1,262 @@
+"""What a tuning job says, as tables: one source for the command's text and the HTML report.
+
+Each function returns a :class:`Table` (a title, column heads, rows of already formatted cells
+and notes), so that the text output and the report cannot disagree; :func:`text` and
+:func:`html_table` render it.
+"""
+
+from __future__ import annotations
+
+import html as _html
+import math
+from dataclasses import dataclass, field
+
+from .drive import kv_to_m_per_min_per_mm
+
+__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "loops_table",
+           "thrust_table", "realisation_table", "verdict_lines", "text", "html_table"]
+
+HZ = 1.0 / (2.0 * math.pi)
+
+
+@dataclass(frozen=True)
+class Table:
+    title: str
+    head: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    notes: tuple[str, ...] = field(default=())
+
+
+def _f(value, fmt="{:.4g}", none="-"):
+    if value is None:
+        return none
+    if isinstance(value, float) and not math.isfinite(value):
+        return "unstable" if value > 0 else none
+    return fmt.format(value)
+
+
+def inputs_table(job) -> Table:
+    """The inputs and requirements the design answers to."""
+    axis, problem = job.axis, job.result.problem
+    req = problem.requirements
+    rows = [("axis", axis.name, axis.description)]
+    drive = problem.drive
+    if drive is not None:
+        s = drive.digital
+        if s.is_continuous:
+            rows.append(("drive", "continuous (no sampling, no delays: the paper's model)", ""))
+        else:
+            rows.append(("drive", f"sampled: current {s.current_period * 1e6:g} us, velocity "
+                         f"{s.velocity_period * 1e6:g} us, position {s.position_period * 1e3:g} ms",
+                         f"delays: current {s.current_delay * 1e6:.0f} us, velocity "
+                         f"{(s.velocity_delay + s.speed_measurement_delay) * 1e6:.0f} us, "
+                         f"position {s.position_delay * 1e3:.2g} ms"))
+        if drive.limits is not None:
+            rows.append(("thrust", f"{drive.thrust_peak / 1e3:.3g} kN peak, "
+                         f"{drive.thrust_continuous / 1e3:.3g} kN continuous",
+                         f"{drive.limits.torque_peak:g} / {drive.limits.torque_continuous:g} "
+                         f"N m over r = {drive.ratio:.4g} m/rad"))
+    op = axis.operation
+    if op is not None:
+        rows.append(("operation", ", ".join(f"feeding {v * 1e3:.3g} mm/s" for v in
+                                            op.feed_speeds) or "no feeding regime",
+                     ("standing too; " if op.standing else "")
+                     + (f"rapid {op.rapid_speed:.3g} m/s at {op.acceleration:g} m/s^2"
+                        if op.rapid_speed else "no rapid speed")
+                     + (f"; process force {op.process_force_pp:.4g} N p-p"
+                        if op.process_force_pp else "")))
+    rows.append(("requirements",
+                 f"Ms velocity <= {req.ms_limit('velocity'):.3f}, position <= "
+                 f"{req.ms_limit('position'):.3f}",
+                 f"hierarchy: velocity >= {req.bandwidth_ratio_min:g} x position bandwidth, "
+                 f"current >= {req.current_bandwidth_ratio_min:g} x velocity; Ti x velocity "
+                 f"bandwidth in [{req.ti_bandwidth_min:g}, {req.ti_bandwidth_max or math.inf:g}]"
+                 f"; thrust reserve {req.thrust_margin:.0%}; nonlinear tolerance "
+                 f"{req.nonlinear_tolerance:.0%}; band {req.band[0] * HZ:.3g}-"
+                 f"{req.band[1] * HZ:.3g} Hz"))
+    notes = tuple(f"default taken: {d}" for d in job.notes)
+    return Table("Inputs and requirements", ("", "", ""), tuple(rows), notes)
+
+
+def design_table(job) -> Table:
+    """The design variables and the worst claimed compliance, before and after."""
+    r = job.result
+    d0, d1 = r.initial, r.design
+    rows = [("C guide ways [N s/m]", _f(d0.c), _f(d1.c))]
+    if d0.kv is not None:
+        rows += [("Kv [1/s]", _f(d0.kv), _f(d1.kv)),
+                 ("Kv [(m/min)/mm]", _f(kv_to_m_per_min_per_mm(d0.kv), "{:.3g}"),
+                  _f(kv_to_m_per_min_per_mm(d1.kv), "{:.3g}")),
+                 ("Kp velocity [N m s/rad]", _f(d0.kp), _f(d1.kp)),
+                 ("Ti velocity [s]", _f(d0.ti), _f(d1.ti))]
+    after = r.after
+    w0 = r.before.worst_model
+    w1 = None if after is None else after.worst_model
+    rows += [("worst compliance peak [m/N]", _f(r.before.peak_compliance),
+              _f(None if after is None else after.peak_compliance)),
+             ("  in the model", "-" if w0 is None or not r.before.stable else w0.model.name,
+              "-" if w1 is None else w1.model.name),
+             ("  at [Hz]", _f(r.before.peak_frequency * HZ, "{:.1f}")
+              if r.before.stable else "-",
+              "-" if after is None else _f(after.peak_frequency * HZ, "{:.1f}"))]
+    if r.before.b_crit is not None or (after is not None and after.b_crit is not None):
+        rows.append(("b_crit [mm] (worst model)",
+                     _f(None if r.before.b_crit is None else r.before.b_crit * 1e3, "{:.3g}"),
+                     _f(None if after is None or after.b_crit is None else after.b_crit * 1e3,
+                        "{:.3g}")))
+    notes = []
+    if not r.before.stable:
+        bad = [m.model.name for m in r.before.models if not m.stable]
+        notes.append("the initial design is unstable in: " + ", ".join(bad)
+                     + (" (with the digital drive's delays)" if r.problem.drive is not None
+                        and not r.problem.drive.digital.is_continuous else ""))
+        if r.start is not None and r.start != r.initial:
+            notes.append(f"the tuning started from a softer velocity loop: Kp = "
+                         f"{r.start.kp:.4g} N m s/rad")
+    if r.active:
+        notes.append("active at the optimum: " + "; ".join(r.active))
+    for model, why in r.excluded:
+        notes.append(f"left out of the tuning: {model.name}: {why}")
+    return Table("Design", ("", "before", "after"), tuple(rows), tuple(notes))
+
+
+def regimes_table(job) -> Table:
+    """Regime by regime: the claim, the nonlinear axis before and after, the improvement."""
+    rows = []
+    verdict = job.verdict
+    if verdict is not None:
+        for v in verdict.regimes:
+            imp = v.realised_improvement
+            rows.append((v.name, _f(v.claimed_peak_before, "{:.3g}"), _f(v.claimed_peak, "{:.3g}"),
+                         _f(v.nonlinear_peak_before, "{:.3g}",
+                            none="unstable" if not job.result.before.stable else "-"),
+                         _f(v.nonlinear_peak_after, "{:.3g}"),
+                         "-" if imp is None else f"{imp:.2f}x",
+                         "yes" if v.holds else "NO"))
+        notes = tuple(f"{v.name}: {v.reason}" for v in verdict.regimes if not v.holds)
+        notes += tuple(f"{v.name}: {v.explanation}" for v in verdict.regimes if v.explanation)
+    else:
+        for entry in job.to_dict().get("regimes") or []:
+            rows.append((entry["name"], "", _f(entry["claimed_peak_m_per_n"], "{:.3g}"), "", "",
+                         "", "not simulated"))
+        notes = ("the nonlinear verification was skipped",)
+    return Table("Regimes: worst compliance peak [m/N], linear claim and nonlinear axis",
+                 ("regime", "claim before", "claim after", "nonlinear before",
+                  "nonlinear after", "realised", "holds"), tuple(rows), notes)
+
+
+def loops_table(job) -> Table:
+    """Both loops of the reference model (where the axis moves), before and after."""
+    r = job.result
+    rows = []
+    after = r.after
+    ref = None if after is None else after.models[after.reference].model.name
+    for loop in ("velocity", "position"):
+        a0 = getattr(r.before, loop) if r.before.stable else None
+        a1 = None if after is None else getattr(after, loop)
+        if a0 is None and a1 is None:
+            continue
+        rows += [(f"{loop} loop Ms", _f(a0 and a0.ms, "{:.3f}"), _f(a1 and a1.ms, "{:.3f}")),
+                 ("  phase margin [deg]", _f(a0 and a0.phase_margin_deg, "{:.1f}"),
+                  _f(a1 and a1.phase_margin_deg, "{:.1f}")),
+                 ("  gain margin [dB]", _f(a0 and a0.gain_margin_db, "{:.1f}"),
+                  _f(a1 and a1.gain_margin_db, "{:.1f}")),
+                 ("  bandwidth [Hz]", _f(a0 and a0.bandwidth_hz, "{:.3g}"),
+                  _f(a1 and a1.bandwidth_hz, "{:.3g}"))]
+    notes = [c.text for c in r.checks if c.requirement in (
+        "loop hierarchy", "Ti and velocity bandwidth", "current loop above")
+        and c.model == ref]
+    if r.stats.get("current_loop_bandwidth_hz"):
+        notes.append(f"current loop bandwidth {r.stats['current_loop_bandwidth_hz']:.4g} Hz "
+                     "(rotor held)")
+    return Table(f"Loops ({ref or 'reference model'}; margins include the drive's delays)",
+                 ("", "before", "after"), tuple(rows), tuple(notes))
+
+
+def thrust_table(job) -> Table | None:
+    """Thrust needed against thrust available, term by term, for the tuned design."""
+    t = job.thrust_after
+    if t is None:
+        return None
+    rows = []
+    for case in t["cases"]:
+        terms = ", ".join(f"{k} {v / 1e3:.3g}" for k, v in case["terms_n"].items() if v)
+        rows.append((f"{case['name']} ({case['thrust']})", f"{case['usable_n'] / 1e3:.3g}",
+                     f"{case['needed_n'] / 1e3:.3g}", f"{case['utilisation']:.0%}",
+                     "yes" if case["fits"] else "NO", terms))
+    notes = (f"usable = {1 - t['margin']:.0%} of the motor's thrust ({t['margin']:.0%} kept in "
+             f"reserve); moving mass {t['moving_mass_kg']:.4g} kg at the slide; the budget "
+             f"allows a total viscous C of up to {t['c_max']:.4g} N s/m",)
+    return Table("Thrust [kN]: usable, needed (at the tuned C)",
+                 ("case", "usable", "needed", "of available", "fits", "terms [kN]"),
+                 tuple(rows), notes)
+
+
+def realisation_table(job) -> Table | None:
+    """What could build the tuned C, its cost, whether the budget holds."""
+    if not job.c_realisation:
+        return None
+    rows = []
+    for x in job.c_realisation:
+        rows.append((x.option, _f(x.added_damping), _f(x.force_feed, "{:.3g}"),
+                     _f(x.power_feed, "{:.3g}"), _f(x.force_rapid, "{:.3g}"),
+                     _f(x.power_rapid, "{:.3g}"), "yes" if x.fits else "no"))
+    notes = tuple(f"{x.option}: {x.note}" for x in job.c_realisation)
+    return Table("Realising C: added damping dC [N s/m], extra force [N] and power [W] at the "
+                 "highest feed and at rapid traverse",
+                 ("option", "dC", "force feed", "power feed", "force rapid", "power rapid",
+                  "fits"), tuple(rows), notes)
+
+
+def verdict_lines(job) -> tuple[str, tuple[str, ...]]:
+    """The verdict line (label and what it means) and what was checked or not."""
+    status = job.status
+    r = job.result
+    if status == "verified":
+        head = ("VERIFIED: the linear checks hold in every regime model and the nonlinear axis "
+                "holds the claim in every regime")
+    elif status == "linear only":
+        head = ("NOT VERIFIED (linear check only): the linear checks hold in every regime "
+                "model; the nonlinear verification was skipped")
+    else:
+        reasons = list(job.verdict.reasons) if job.verdict is not None else list(r.reasons)
+        head = "NOT VERIFIED: " + ("; ".join(reasons) if reasons else "see the checks")
+    lines = []
+    if job.verdict is not None:
+        lines += [f"checked: {c}" for c in job.verdict.checked]
+        lines += [f"not checked: {c}" for c in job.verdict.not_checked]
+    return head, tuple(lines)
+
+
+def text(table: Table | None, widths=None) -> str:
+    """A table as aligned text lines."""
+    if table is None:
+        return ""
+    cols = len(table.head)
+    rows = [table.head] + list(table.rows)
+    widths = widths or [max(len(str(r[i])) for r in rows) for i in range(cols)]
+    out = [f"  {table.title}"]
+    for k, row in enumerate(rows):
+        if k == 0 and not any(table.head):
+            continue
+        cells = [str(c).ljust(widths[i]) if i == 0 else str(c).rjust(widths[i])
+                 for i, c in enumerate(row)]
+        if cols == 3 and table.head == ("", "", ""):  # a two-column listing
+            cells = [str(row[0]).ljust(widths[0]), str(row[1]), str(row[2])]
+        out.append("    " + "  ".join(cells).rstrip())
+    out += [f"    ({n})" for n in table.notes]
+    return "\n".join(out)
+
+
+def html_table(table: Table | None) -> str:
+    """A table as HTML (cells escaped)."""
+    if table is None:
+        return ""
+    esc = _html.escape
+    head = ("" if not any(table.head) else
+            "<tr>" + "".join(f"<th>{esc(h)}</th>" for h in table.head) + "</tr>")
+    body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>"
+                   for row in table.rows)
+    notes = "".join(f"<li>{esc(n)}</li>" for n in table.notes)
+    return (f"<h2>{esc(table.title)}</h2><table>{head}{body}</table>"
+            + (f"<ul class='notes'>{notes}</ul>" if notes else ""))

@@ -1,0 +1,317 @@
+"""The thrust budget of a feed axis and the hardware that could realise a guide-way damping C.
+
+A viscous guide-way damping C damps the structure, but in the feed direction it also resists
+feeding: its force C v comes out of the motor's thrust. The budget compares what the axis needs
+with what the drive gives, at the slide (SI)::
+
+    at rapid traverse (peak thrust):     g(v_r) + C v_r + m a                <= (1 - margin) F_peak
+    while cutting (continuous thrust):   g(v_f) + C v_f + F_cut             <= (1 - margin) F_cont
+
+with g(v) the Coulomb-Stribeck friction of the guide ways (LuGre steady state without its viscous
+part), C the total viscous damping (the identified sigma2 or the design's C that replaces it), m
+the moving mass referred to the slide (slide, work piece, screw and motor inertia through the
+transmission), a the acceleration of rapid moves, F_cut the mean cutting force against the feed,
+F_peak = T_peak / r and F_cont = T_cont / r. All axis friction is lumped at the guide ways (the
+paper's sec 3), so the transmission's efficiency is already in the friction and is taken as 1.
+
+What could realise C (:func:`c_realisations`):
+
+* a **viscous element** (hydrostatic guides, a viscous damper in the feed direction): the added
+  damping dC = C - sigma2 costs dC v of force and dC v^2 of power at every speed;
+* a **friction damper** (a preloaded pad with its own contact stiffness k, a Jenkins element):
+  its describing function at the pad vibration amplitude A the process force gives,
+  Ceq = 4 F_d (A - F_d/k) / (pi w A^2) (the paper's Eq 9 with the area of its own Fig 6 cycle,
+  see :mod:`servotune.friction.equivalent`), equals dC for the friction level
+  ``F_d = (k A / 2) (1 - sqrt(1 - pi w dC / k))``, which exists while dC <= k / (pi w). It costs
+  F_d of thrust at every speed but damps only while the pads vibrate beyond F_d/k and reverse:
+  not while feeding, when the friction force does not change sign.
+
+References
+----------
+G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
+sec 3, 4.2 (Eq 8-10). Y. Altintas, Manufacturing Automation, 2nd ed. (2012), sec 6.2 (feed
+drive sizing: friction, inertia and cutting loads). C. Brecher, M. Weck, Werkzeugmaschinen 3:
+Mechatronische Systeme, Vorschubantriebe, Prozessdiagnose, 2nd ed., Springer (2021), ch 4
+(sizing feed drives; hydrostatic guides).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from .drive import Drive
+from .friction.equivalent import describing_function
+from .friction.lugre import LuGreParameters, stribeck_curve
+from .regimes import Operation
+from .structure.model import ModalModel
+
+__all__ = ["ThrustCase", "ThrustBudget", "CRealisation", "moving_mass", "thrust_budget",
+           "c_realisations"]
+
+
+def moving_mass(structure: ModalModel, pads, drive: Drive | None = None) -> float:
+    """The mass the motor accelerates, referred to the slide [kg].
+
+    The rigid-body motion of the structure with the pads free (the axis travel) is found as the
+    null space of K, scaled to a unit mean pad displacement; its kinetic-energy mass
+    ``phi^T M phi`` holds the slide, the work piece and the rotating parts through the
+    transmission (a motor inertia J counts J/r^2).
+
+    Raises
+    ------
+    ValueError
+        When the structure has no rigid-body travel along the pads.
+
+    Examples
+    --------
+    Two masses on a spring, pads on the first:
+
+    >>> s = ModalModel([[100.0, 0.0], [0.0, 50.0]], [[1e6, -1e6], [-1e6, 1e6]], ["pad1.x", "wp.x"])
+    >>> round(moving_mass(s, ["pad1.x"]), 6)
+    150.0
+    """
+    k, m = structure.stiffness, structure.mass
+    lam, vec = scipy.linalg.eigh(k, m)
+    scale = max(abs(lam).max(), 1e-300)
+    rigid = vec[:, np.abs(lam) <= 1e-9 * scale]
+    idx = structure.index(list(pads))
+    if rigid.shape[1] == 0:
+        raise ValueError("the structure has no rigid-body travel (it is grounded): the moving "
+                         "mass of the axis cannot be found; leave the pads free in the model")
+    rows = rigid[idx]  # pad displacements of each rigid mode
+    coeff, *_ = np.linalg.lstsq(rows, np.ones(len(idx)), rcond=None)
+    phi = rigid @ coeff
+    if np.abs(rows @ coeff - 1.0).max() > 1e-6:
+        raise ValueError("no rigid-body motion moves all pads together; check the pad DOFs")
+    return float(phi @ m @ phi)
+
+
+@dataclass(frozen=True)
+class ThrustCase:
+    """One load case of the budget (SI)."""
+
+    name: str
+    speed: float
+    thrust_kind: str          # "peak" or "continuous"
+    available: float          # [N]
+    usable: float             # (1 - margin) x available [N]
+    terms: tuple              # ((name, force [N]), ...)
+
+    @property
+    def needed(self) -> float:
+        return float(sum(f for _, f in self.terms))
+
+    @property
+    def fits(self) -> bool:
+        return self.needed <= self.usable * (1 + 1e-9)
+
+    @property
+    def utilisation(self) -> float:
+        """Needed over available thrust [-]."""
+        return self.needed / self.available
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "speed_m_per_s": self.speed, "thrust": self.thrust_kind,
+                "available_n": self.available, "usable_n": self.usable,
+                "needed_n": self.needed, "fits": self.fits,
+                "utilisation": self.utilisation,
+                "terms_n": {name: force for name, force in self.terms}}
+
+
+@dataclass(frozen=True)
+class ThrustBudget:
+    """What the axis needs against what the drive gives (see the module docstring).
+
+    Attributes
+    ----------
+    thrust_peak, thrust_continuous : float
+        [N] at the slide.
+    margin : float
+        Fraction kept in reserve.
+    mass : float
+        Moving mass referred to the slide [kg].
+    friction : LuGreParameters
+        Axis-total friction (its sigma2 is replaced by the C of each evaluation).
+    operation : Operation
+    """
+
+    thrust_peak: float
+    thrust_continuous: float
+    margin: float
+    mass: float
+    friction: LuGreParameters
+    operation: Operation
+
+    def _coulomb(self, v: float) -> float:
+        return float(stribeck_curve(self.friction, v))
+
+    def cases(self, c: float, extra_friction: float = 0.0) -> tuple[ThrustCase, ...]:
+        """The load cases with total viscous damping ``c`` [N s/m] and an added friction level
+        ``extra_friction`` [N] (a friction damper)."""
+        op, out = self.operation, []
+        usable_peak = (1 - self.margin) * self.thrust_peak
+        usable_cont = (1 - self.margin) * self.thrust_continuous
+        if op.rapid_speed is not None:
+            v = op.rapid_speed
+            terms = [("friction g(v)", self._coulomb(v)), ("viscous C v", c * v),
+                     ("acceleration m a", self.mass * op.acceleration)]
+            if extra_friction:
+                terms.append(("friction damper", extra_friction))
+            out.append(ThrustCase("rapid traverse", v, "peak", self.thrust_peak, usable_peak,
+                                  tuple(terms)))
+        for v in op.feed_speeds:
+            terms = [("friction g(v)", self._coulomb(v)), ("viscous C v", c * v),
+                     ("cutting force", op.feed_force)]
+            if extra_friction:
+                terms.append(("friction damper", extra_friction))
+            out.append(ThrustCase(f"feeding {v * 1e3:.3g} mm/s", v, "continuous",
+                                  self.thrust_continuous, usable_cont, tuple(terms)))
+        if not op.feed_speeds:  # holding against the cutting force at rest
+            out.append(ThrustCase("standing", 0.0, "continuous", self.thrust_continuous,
+                                  usable_cont, (("cutting force", op.feed_force),)))
+        return tuple(out)
+
+    def linear_form(self) -> tuple[tuple[float, float, float, str], ...]:
+        """Each case as ``fixed + c * speed <= usable`` (fixed [N], speed [m/s], usable [N],
+        name): the form the tuning constrains."""
+        out = []
+        for case in self.cases(0.0):
+            out.append((case.needed, case.speed, case.usable, case.name))
+        return tuple(out)
+
+    def c_max(self) -> float:
+        """The largest total viscous damping [N s/m] every case allows (inf when no case has a
+        speed); negative when even C = 0 does not fit."""
+        limits = [(usable - fixed) / speed for fixed, speed, usable, _ in self.linear_form()
+                  if speed > 0]
+        return min(limits) if limits else math.inf
+
+    def to_dict(self, c: float) -> dict:
+        cases = self.cases(c)
+        return {"thrust_peak_n": self.thrust_peak, "thrust_continuous_n": self.thrust_continuous,
+                "margin": self.margin, "moving_mass_kg": self.mass,
+                "c_max": self.c_max(), "fits": all(x.fits for x in cases),
+                "cases": [x.to_dict() for x in cases]}
+
+
+def thrust_budget(drive: Drive | None, friction: LuGreParameters | None,
+                  operation: Operation | None, structure: ModalModel, pads,
+                  margin: float) -> ThrustBudget | None:
+    """The budget of an axis, or None when the drive has no torque limits (or no operation)."""
+    if drive is None or drive.limits is None or friction is None or operation is None:
+        return None
+    return ThrustBudget(drive.thrust_peak, drive.thrust_continuous, float(margin),
+                        moving_mass(structure, pads, drive), friction, operation)
+
+
+@dataclass(frozen=True)
+class CRealisation:
+    """One way to build a guide-way damping (SI)."""
+
+    option: str
+    added_damping: float                 # dC = C - sigma2 [N s/m]
+    force_feed: float | None             # extra force while feeding (highest feed) [N]
+    power_feed: float | None             # [W]
+    force_rapid: float | None            # extra force at rapid traverse [N]
+    power_rapid: float | None            # [W]
+    friction_level: float | None         # friction damper: F_d [N]
+    fits: bool
+    note: str
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def _friction_damper_level(dc: float, amplitude: float, omega: float,
+                           stiffness: float) -> float | None:
+    """F_d with Ceq(F_d) = dc for the elasto-plastic element (closed form), or None."""
+    x = math.pi * omega * dc / stiffness
+    if x > 1.0:
+        return None
+    return 0.5 * stiffness * amplitude * (1.0 - math.sqrt(1.0 - x))
+
+
+def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
+                   amplitude: float | None, frequency: float | None,
+                   contact_stiffness: float | None) -> tuple[CRealisation, ...]:
+    """The options that would realise a total viscous damping ``c`` over the identified
+    ``sigma2`` [N s/m], with their cost and whether the thrust budget holds.
+
+    Parameters
+    ----------
+    budget : ThrustBudget, optional
+        Without it the options are reported without a verdict on the thrust.
+    amplitude, frequency : float, optional
+        Pad vibration amplitude [m] and angular frequency [rad/s] at the process force (for the
+        friction damper).
+    contact_stiffness : float, optional
+        Tangential stiffness of the friction damper's contact [N/m] (the guide ways' sigma0).
+    """
+    dc = float(c) - float(sigma2)
+    op = budget.operation if budget is not None else None
+    v_feed = max(op.feed_speeds) if op is not None and op.feed_speeds else None
+    v_rapid = op.rapid_speed if op is not None else None
+    out = []
+    if dc <= 0:
+        fits = budget is None or all(x.fits for x in budget.cases(c))
+        out.append(CRealisation(
+            "none", dc, 0.0, 0.0, 0.0, 0.0, None, fits,
+            "the design needs no more viscous damping than the guide ways have"
+            + ("" if dc == 0 else f" (it assumes {abs(dc):.3g} N s/m less: lower-friction "
+                                  "guide ways or lubricant)")))
+        return tuple(out)
+    fits_viscous = None if budget is None else all(x.fits for x in budget.cases(c))
+    out.append(CRealisation(
+        "viscous element", dc,
+        None if v_feed is None else dc * v_feed, None if v_feed is None else dc * v_feed ** 2,
+        None if v_rapid is None else dc * v_rapid,
+        None if v_rapid is None else dc * v_rapid ** 2, None, bool(fits_viscous is not False),
+        "hydrostatic guides or a viscous damper in the feed direction: damps in every regime, "
+        "resists feeding with dC v" + ("" if budget is not None else
+                                       " (no torque limits given: the thrust is not checked)")))
+    if amplitude is None or frequency is None or not contact_stiffness:
+        return tuple(out)
+    level = _friction_damper_level(dc, amplitude, frequency, contact_stiffness)
+    if level is None:
+        out.append(CRealisation(
+            "friction damper", dc, None, None, None, None, None, False,
+            f"no friction level reaches {dc:.3g} N s/m at the pad amplitude {amplitude:.3g} m "
+            f"(the most is k/(pi w) = {contact_stiffness / (math.pi * frequency):.3g} N s/m)"))
+        return tuple(out)
+    lugre_level = _lugre_damper_level(dc, amplitude, frequency, contact_stiffness, level)
+    fits = None
+    if budget is not None:
+        fits = all(x.fits for x in budget.cases(sigma2, extra_friction=lugre_level or level))
+    out.append(CRealisation(
+        "friction damper", dc, level, None if v_feed is None else level * v_feed, level,
+        None if v_rapid is None else level * v_rapid, level, bool(fits is not False),
+        f"a preloaded friction pad of {level:.4g} N (LuGre describing function: "
+        f"{'n/a' if lugre_level is None else f'{lugre_level:.4g}'} N) on a contact of "
+        f"{contact_stiffness:.3g} N/m gives Ceq = dC at A = {amplitude:.3g} m and "
+        f"{frequency / (2 * math.pi):.1f} Hz; it damps only while the pads vibrate beyond "
+        f"{level / contact_stiffness:.3g} m and reverse (standing), not while feeding"))
+    return tuple(out)
+
+
+def _lugre_damper_level(dc, amplitude, omega, stiffness, guess) -> float | None:
+    """F_d of a LuGre element (fc = fs = F_d, sigma1 = sigma2 = 0, vs = 1 mm/s) whose
+    describing function gives dc at (amplitude, omega), near the closed-form ``guess``."""
+    def ceq(level):
+        p = LuGreParameters(fc=level, fs=level, vs=1e-3, delta=1.0, sigma0=stiffness,
+                            sigma1=0.0, sigma2=0.0)
+        return float(describing_function(p, amplitude, omega)[0]) - dc
+
+    lo, hi = 1e-3 * guess, 0.5 * stiffness * amplitude
+    try:
+        if ceq(lo) * ceq(hi) > 0:
+            return None
+        return float(scipy.optimize.brentq(ceq, lo, min(hi, 4 * guess) if ceq(min(hi, 4 * guess))
+                                           * ceq(lo) < 0 else hi, rtol=1e-6))
+    except (ValueError, RuntimeError):
+        return None

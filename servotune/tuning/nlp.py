@@ -1,0 +1,409 @@
+"""The tuning problem as a nonlinear program, written out in one place.
+
+Variables (log-scaled, ``u_v = log(x_v / x_v0)`` for each free design variable x_v among C,
+Kv, Kp, Ti), the epigraph variables of the objective, and the data of the frequency grids as
+parameters (one column per frequency and regime model; see :mod:`servotune.tuning.ports`)::
+
+    minimise    w_p (t + mu mean_m t_m) + w_c q + w_t Kv0 / Kv + w_C (C - C_lo) / C_span
+
+    subject to  |h_m(w)|^2 / h0^2 <= t_m^2          every cutting model m, band frequency w
+                t_m <= t
+                mu_d Re h_m(w) / s0 + q >= 0         (chatter: b_crit = 1 / (2 Kt s0 q))
+                Ms_v^2 |1 + L_v,m(w)|^2 >= 1         every model m, loop frequency w
+                Ms_p^2 |1 + L_p,m(w)|^2 >= 1
+                |T_v,m(w)| >= 1/sqrt2   for w <= N gamma_m Kv      (loop hierarchy)
+                |T_v,m(w)| >= 1/sqrt2   for w <= r_min / Ti            (Ti w_b >= r_min)
+                |T_v,m(w)| <= 1/sqrt2   for w in [r_max/Ti, 1.25 r_max/Ti] (Ti w_b <= r_max)
+                |T_v,m(w)| <= 1/sqrt2   for w in [w_i/N_i, 1.25 w_i/N_i] (current loop above)
+                            (the last four in every moving model m: sliding or viscous pads)
+                F_fix,j + C v_j <= (1 - margin) F_avail,j      every thrust case j
+                Kv >= Kv_min,  bounds on every u_v
+
+h_m is the work-piece compliance, L_v and L_p the velocity loop (position loop open) and the
+position loop (velocity loop closed), T = L/(1 + L), all with the guide ways of model m and the
+digital drive's delays. The conditions "for w <= ..." depend on the design; they are imposed at
+every grid frequency with a smooth gate: ``value + sigma(kappa log(w / w_edge)) >= 0`` with the
+value normalised to (-1, 1) (e.g. (|T|^2 - 1/2)/(|T|^2 + 1/2)) and the logistic sigma switching
+the condition off past the edge; the edges are placed ``GATE_SAFETY`` beyond the requirement so
+that the gate's soft part does not eat into it. gamma_m, the ratio of the position loop's
+bandwidth to Kv, is a parameter the solve updates from the current design between exchange
+rounds (:mod:`servotune.tuning.solve`).
+
+The Hessian of the Lagrangian is assembled from the per-frequency Hessians of the kernels
+(mapped and summed over the columns with their multipliers) instead of casadi's generic
+second-order sweep over the whole NLP, which costs several times more per iteration.
+
+References
+----------
+J. A. E. Andersson et al., "CasADi: a software framework for nonlinear optimization and
+optimal control", Math. Prog. Comp. 11 (2019) 1-36. A. Waechter, L. T. Biegler, "On the
+implementation of an interior-point filter line-search algorithm for large-scale nonlinear
+programming", Math. Prog. 106 (2006) 25-57 (IPOPT). P. Apkarian, D. Noll, "Nonsmooth H-infinity
+synthesis", IEEE TAC 51 (2006) 71-86 (worst case over several models, as MATLAB's systune).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .ports import SymbolicPorts, responses
+from .problem import VARIABLES, Design, TuningProblem
+
+__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "GATE_ROWS", "Kernels", "Solver", "Solution",
+           "gate_parameters"]
+
+#: kappa of the logistic gates (per unit of log frequency): 5 % past an edge the gate is
+#: 82 % open, 10 % past it 95 %.
+GATE_SHARPNESS = 30.0
+#: Edges of the gated constraints lie this factor beyond the requirement.
+GATE_SAFETY = 1.15
+#: The gated loop constraints, in the order of the kernel's rows after the two Ms rows.
+GATE_ROWS = ("loop hierarchy", "Ti bandwidth min", "Ti bandwidth max", "current loop above")
+
+
+def _sigmoid(y):
+    return 1.0 / (1.0 + ca.exp(-GATE_SHARPNESS * y))
+
+
+def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
+                    current_bandwidth: float | None) -> np.ndarray:
+    """The per-model constants of the gated rows (one row per model): for each gated
+    constraint whether it applies to the model (1/0) and the log of its edge parameter."""
+    req = problem.requirements
+    moving = set(problem.moving_models)
+    rows = []
+    for m in range(len(problem.regimes)):
+        on = 1.0 if m in moving else 0.0
+        n_ratio = req.bandwidth_ratio_min
+        wx = (current_bandwidth / req.current_bandwidth_ratio_min
+              if current_bandwidth and req.current_bandwidth_ratio_min else 1.0)
+        rows.append([
+            on * (n_ratio > 0), math.log(GATE_SAFETY * max(n_ratio, 1.0) * gamma[m]),
+            on * (req.ti_bandwidth_min > 0), math.log(GATE_SAFETY * max(req.ti_bandwidth_min,
+                                                                        1e-9)),
+            on * (req.ti_bandwidth_max > 0), math.log(max(req.ti_bandwidth_max, 1e-9)
+                                                      / GATE_SAFETY),
+            on * (req.current_bandwidth_ratio_min > 0 and current_bandwidth is not None),
+            math.log(wx / GATE_SAFETY)])
+    return np.array(rows)
+
+
+N_GATE_PARAMS = 8
+
+
+class Kernels:
+    """The constraint functions at ONE frequency (one data column) as casadi functions of
+    (u, data), u = log(x / x0) the scaled free variables, with the Hessians of their
+    multiplier-weighted sums; the NLP maps them over the grid columns."""
+
+    def __init__(self, problem: TuningProblem, h0: float, s0: float):
+        x0 = problem.initial_design()
+        free = problem.free
+        u = ca.SX.sym("u", len(free))
+        values = {v: getattr(x0, v) or 0.0 for v in VARIABLES}
+        for i, v in enumerate(free):
+            values[v] = getattr(x0, v) * ca.exp(u[i])
+        w_peak, w_chatter = problem.weights
+        # band: compliance peak and chatter rows
+        d_band = ca.SX.sym("d", SymbolicPorts.size(problem))
+        h = responses(problem, SymbolicPorts(problem, d_band), values)["compliance"]
+        band = []
+        if w_peak > 0:
+            band.append(h.abs2() / h0**2)
+        if w_chatter > 0:
+            band.append(problem.chatter.mu * h.re / s0)
+        self.band, self.band_hessian = self._pair("band", u, d_band, ca.vertcat(*band))
+        self.band_rows = (["compliance peak"] if w_peak > 0 else []) + (
+            ["chatter"] if w_chatter > 0 else [])
+        self.loop = self.loop_hessian = None
+        self.loop_rows = []
+        if problem.drive is None:
+            return
+        req = problem.requirements
+        d_loop = ca.SX.sym("d", SymbolicPorts.size(problem, N_GATE_PARAMS))
+        ports = SymbolicPorts(problem, d_loop, N_GATE_PARAMS)
+        resp = responses(problem, ports, values)
+        lv, lp = resp["loop_velocity"], resp["loop_position"]
+        rows = [(1.0 + lv).abs2() * req.ms_limit("velocity") ** 2,
+                (1.0 + lp).abs2() * req.ms_limit("position") ** 2]
+        self.loop_rows = ["Ms velocity loop", "Ms position loop"]
+        lw = ca.log(ports.omega)
+        tv2 = lv.abs2() / (1.0 + lv).abs2()
+        on_h, edge_h, on_lo, edge_lo, on_hi, edge_hi, on_i, edge_i = ports.extra
+        kv = values["kv"]
+        ti = values["ti"]
+        off = 2.0
+        if req.bandwidth_ratio_min > 0:
+            edge = edge_h + ca.log(kv)
+            rows.append((tv2 - 0.5) / (tv2 + 0.5) + _sigmoid(lw - edge) + off * (1 - on_h))
+            self.loop_rows.append(GATE_ROWS[0])
+        if req.ti_bandwidth_min > 0:
+            edge = edge_lo - ca.log(ti)
+            rows.append((tv2 - 0.5) / (tv2 + 0.5) + _sigmoid(lw - edge) + off * (1 - on_lo))
+            self.loop_rows.append(GATE_ROWS[1])
+        if req.ti_bandwidth_max > 0:
+            edge = edge_hi - ca.log(ti)
+            rows.append((0.5 - tv2) / (0.5 + tv2) + _sigmoid(edge - lw)
+                        + _sigmoid(lw - edge - math.log(1.25)) + off * (1 - on_hi))
+            self.loop_rows.append(GATE_ROWS[2])
+        if req.current_bandwidth_ratio_min > 0:
+            rows.append((0.5 - tv2) / (0.5 + tv2) + _sigmoid(edge_i - lw)
+                        + _sigmoid(lw - edge_i - math.log(1.25)) + off * (1 - on_i))
+            self.loop_rows.append(GATE_ROWS[3])
+        self.loop, self.loop_hessian = self._pair("loop", u, d_loop, ca.vertcat(*rows))
+
+    @staticmethod
+    def _pair(name, u, d, out):
+        """The function and the Hessian in u of its outputs weighted by multipliers."""
+        lam = ca.SX.sym("lam", out.numel())
+        hessian = ca.hessian(ca.dot(lam, out), u)[0]
+        return (ca.Function(name, [u, d], [out]),
+                ca.Function(f"{name}_hessian", [u, d, lam], [ca.densify(hessian)]))
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What one IPOPT solve returns."""
+
+    design: Design
+    objective: float
+    stats: dict
+    g: np.ndarray
+    multipliers: tuple
+    x: np.ndarray
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.stats["success"]) or self.stats["return_status"] in (
+            "Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+
+class Solver:
+    """The NLP for grids of given sizes (band: ``n_band`` frequencies x the cutting models;
+    loop: ``n_loop`` frequencies x all models); the grids' data are its parameters.
+
+    ``rows`` lists, for every constraint row, ``(group, model, column)`` with ``column`` the
+    data column (frequency index x model) or None, so multipliers can follow a refined grid.
+    """
+
+    def __init__(self, problem: TuningProblem, kernels: Kernels, n_band: int, n_loop: int,
+                 warm: bool = False, max_iter: int = 500, callback=None):
+        self.problem, self.kernels = problem, kernels
+        req = problem.requirements
+        x0 = problem.initial_design()
+        self.free = free = problem.free
+        nf = len(free)
+        self.scale = {v: getattr(x0, v) for v in free}
+        cut = problem.cutting_models
+        n_models = len(problem.regimes)
+        w_peak, w_chatter = problem.weights
+        self.n_band, self.n_loop = n_band, n_loop
+        n_t = (1 + len(cut)) if w_peak > 0 else 0
+        n_q = 1 if w_chatter > 0 else 0
+        p = ca.MX.sym("p", nf)
+        tt = ca.MX.sym("t", n_t)
+        q = ca.MX.sym("q", n_q)
+        self.n_t, self.n_q = n_t, n_q
+
+        def design_value(v):
+            return self.scale[v] * ca.exp(p[free.index(v)]) if v in free else getattr(x0, v)
+
+        g, lbg, ubg, self.rows = [], [], [], []
+
+        def add(expr, lo, hi, group, models=None, columns=None):
+            n = expr.shape[0]
+            g.append(expr)
+            lbg.extend([lo] * n)
+            ubg.extend([hi] * n)
+            for i in range(n):
+                self.rows.append((group, None if models is None else models[i],
+                                  None if columns is None else columns[i]))
+
+        n_rows_band = kernels.band.size1_in(1)
+        data_band = ca.MX.sym("band", n_rows_band, n_band * len(cut))
+        params = [ca.vec(data_band)]
+        band = kernels.band.map(n_band * len(cut))(p, data_band)
+        band_cols = list(range(n_band * len(cut)))
+        band_models = [cut[j // n_band] for j in band_cols]
+        weights_band = []  # (row of the kernel, group) for the Hessian
+        row = 0
+        if w_peak > 0:
+            t_of_col = ca.vertcat(*[ca.repmat(tt[1 + i], n_band, 1) for i in range(len(cut))])
+            add(band[row, :].T - t_of_col ** 2, -ca.inf, 0.0, "compliance peak", band_models,
+                band_cols)
+            weights_band.append("compliance peak")
+            row += 1
+        if w_chatter > 0:
+            add(band[row, :].T + q[0], 0.0, ca.inf, "chatter", band_models, band_cols)
+            weights_band.append("chatter")
+        if w_peak > 0:
+            add(tt[0] - tt[1:], 0.0, ca.inf, "worst peak")
+        data_loop = None
+        if kernels.loop is not None:
+            n_rows_loop = kernels.loop.size1_in(1)
+            data_loop = ca.MX.sym("loop", n_rows_loop, n_loop * n_models)
+            params.append(ca.vec(data_loop))
+            loops = kernels.loop.map(n_loop * n_models)(p, data_loop)
+            loop_cols = list(range(n_loop * n_models))
+            loop_models = [j // n_loop for j in loop_cols]
+            for i, group in enumerate(kernels.loop_rows):
+                lo = 1.0 if group.startswith("Ms") else 0.0
+                add(loops[i, :].T, lo, ca.inf, group, loop_models, loop_cols)
+        # constraints without frequencies: thrust cases, kv_min
+        rest_start = len(lbg)
+        if problem.thrust is not None and "c" in free:
+            for fixed, speed, usable, name in problem.thrust.linear_form():
+                if speed > 0:
+                    add((fixed + design_value("c") * speed) / usable, -ca.inf, 1.0,
+                        f"thrust: {name}")
+        if "kv" in free and req.kv_min > 0:
+            add(design_value("kv") / req.kv_min, 1.0, ca.inf, "kv_min")
+        objective = 0
+        if w_peak > 0:
+            objective = w_peak * (tt[0] + problem.mean_weight * ca.sum1(tt[1:]) / len(cut))
+        if w_chatter > 0:
+            objective = objective + w_chatter * q[0]
+        if "kv" in free and problem.tracking_weight > 0:
+            objective = objective + problem.tracking_weight * x0.kv / design_value("kv")
+        if problem.c_cost is not None:
+            c_lo, span = problem.c_cost
+            objective = objective + problem.c_cost_weight * (design_value("c") - c_lo) / span
+        x = ca.vertcat(p, tt, q)
+        self.nlp = {"x": x, "p": ca.vertcat(*params), "f": objective, "g": ca.vertcat(*g)}
+        self.lbg, self.ubg = np.array(lbg), np.array(ubg)
+        self.groups = [r[0] for r in self.rows]
+        self.hessian = self._hessian(x, p, tt, objective, g, rest_start, data_band, data_loop,
+                                     weights_band, len(cut), n_models)
+        options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                   "ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8, "ipopt.max_iter": max_iter,
+                   "ipopt.mu_strategy": "adaptive", "hess_lag": self.hessian}
+        if callback is not None:
+            options["iteration_callback"] = callback
+        if warm:
+            options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
+                            "ipopt.warm_start_bound_push": 1e-9,
+                            "ipopt.warm_start_mult_bound_push": 1e-9})
+        self.solver = ca.nlpsol("tune", "ipopt", self.nlp, options)
+        lo = [math.log(problem.bounds[v][0] / self.scale[v]) for v in free]
+        hi = [math.log(problem.bounds[v][1] / self.scale[v]) for v in free]
+        self.lbx = np.array([*lo, *([0.0] * n_t), *([-ca.inf] * n_q)])
+        self.ubx = np.array([*hi, *([ca.inf] * n_t), *([ca.inf] * n_q)])
+
+    def _hessian(self, x, p, tt, objective, g, rest_start, data_band, data_loop, weights_band,
+                 n_cut, n_models):
+        kernels = self.kernels
+        nf = p.shape[0]
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(self.lbg))
+        groups = np.array(self.groups)
+
+        def weights(names, n_cols):
+            rows = []
+            for name in names:
+                idx = np.nonzero(groups == name)[0].tolist()
+                rows.append(lam_g[idx].T if idx else ca.MX.zeros(1, n_cols))
+            return ca.vertcat(*rows)
+
+        n_band_cols = self.n_band * n_cut
+        hess_p = kernels.band_hessian.map(f"band_hessian_{n_band_cols}", "serial", n_band_cols,
+                                          [0], [0])(p, data_band,
+                                                    weights(weights_band, n_band_cols))
+        if data_loop is not None:
+            n_loop_cols = self.n_loop * n_models
+            hess_p += kernels.loop_hessian.map(f"loop_hessian_{n_loop_cols}", "serial",
+                                               n_loop_cols, [0], [0])(
+                p, data_loop, weights(kernels.loop_rows, n_loop_cols))
+        rest = lam_f * objective
+        g_all = ca.vertcat(*g)
+        for i in range(rest_start, len(self.lbg)):
+            rest = rest + lam_g[i] * g_all[i]
+        hess_rest = ca.hessian(rest, x)[0]
+        n_x = x.shape[0]
+        block = ca.MX(n_x, n_x)
+        block[:nf, :nf] = hess_p
+        if self.n_t:
+            # d^2/dt_m^2 of (|h|^2/h0^2 - t_m^2) weighted: -2 sum of the model's multipliers
+            peak = np.nonzero(groups == "compliance peak")[0]
+            for i in range(n_cut):
+                idx = peak[i * self.n_band:(i + 1) * self.n_band].tolist()
+                j = nf + 1 + i
+                block[j, j] = -2.0 * ca.sum1(lam_g[idx])
+        hessian = block + hess_rest
+        return ca.Function("hess_lag", [x, self.nlp["p"], lam_f, lam_g],
+                           [ca.triu(ca.densify(hessian))],
+                           ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+
+    def values(self, design: Design) -> np.ndarray:
+        return np.array([math.log(getattr(design, v) / self.scale[v]) for v in self.free])
+
+    def epigraph_start(self, design: Design, band_data: np.ndarray) -> np.ndarray:
+        """Epigraph variables (t, t_m, q) that make the grid constraints of ``design`` hold."""
+        cols = band_data.shape[1]
+        band = np.array(self.kernels.band.map(cols)(self.values(design), band_data))
+        out = []
+        row = 0
+        if self.n_t:
+            per = np.sqrt(np.maximum(band[row].reshape(-1, self.n_band).max(axis=1), 0.0))
+            out += [float(per.max()), *per.tolist()]
+            row += 1
+        if self.n_q:
+            out.append(float(-band[row].min()))
+        return np.array(out)
+
+    def solve(self, design: Design, band_data, loop_data, region: float | None = None,
+              multipliers=None) -> Solution:
+        """Solve from ``design`` with the grids' data (:meth:`PortData.rows` of the cutting
+        models for the band, of all models with the gate parameters for the loops);
+        ``region`` limits each log-variable to +-region around it; ``multipliers`` =
+        (lam_x, lam_g) warm-starts a solver built with ``warm=True``."""
+        p0 = self.values(design)
+        y0 = self.epigraph_start(design, band_data)
+        lbx, ubx = self.lbx.copy(), self.ubx.copy()
+        n = p0.size
+        if region is not None:
+            lbx[:n] = np.maximum(lbx[:n], p0 - region)
+            ubx[:n] = np.minimum(ubx[:n], p0 + region)
+        params = [band_data.ravel(order="F")]
+        if loop_data is not None and self.kernels.loop is not None:
+            params.append(loop_data.ravel(order="F"))
+        args = {"x0": np.concatenate([p0, y0]), "lbx": lbx, "ubx": ubx, "lbg": self.lbg,
+                "ubg": self.ubg, "p": np.concatenate(params)}
+        if multipliers is not None:
+            args["lam_x0"], args["lam_g0"] = multipliers
+        sol = self.solver(**args)
+        stats = self.solver.stats()
+        x = np.array(sol["x"]).ravel()
+        # IPOPT may end a hair outside a bound (its bound_relax_factor): clip to the bounds
+        values = {v: float(np.clip(self.scale[v] * math.exp(x[i]), *self.problem.bounds[v]))
+                  for i, v in enumerate(self.free)}
+        new = Design(**{**design.to_dict(), **values})
+        return Solution(new, float(sol["f"]), stats, np.array(sol["g"]).ravel(),
+                        (np.array(sol["lam_x"]).ravel(), np.array(sol["lam_g"]).ravel()), x)
+
+    def violations(self, g: np.ndarray) -> dict:
+        """Largest violation of each constraint group (scaled units)."""
+        out = {}
+        for gi, lo, hi, group in zip(g, self.lbg, self.ubg, self.groups, strict=True):
+            v = max(lo - gi, gi - hi, 0.0)
+            out[group] = max(out.get(group, 0.0), v)
+        return out
+
+    def active(self, g: np.ndarray, tol: float = 1e-5) -> list[str]:
+        """Constraint groups with a row at its bound (besides the objective's epigraph)."""
+        out = []
+        for group in dict.fromkeys(self.groups):
+            if group in ("compliance peak", "chatter", "worst peak"):
+                continue
+            sel = [i for i, gg in enumerate(self.groups) if gg == group]
+            lo, hi = self.lbg[sel], self.ubg[sel]
+            near = np.zeros(len(sel), dtype=bool)
+            fin = np.isfinite(lo)
+            near[fin] |= np.abs(g[sel][fin] - lo[fin]) <= tol * np.maximum(1, np.abs(lo[fin]))
+            fin = np.isfinite(hi)
+            near[fin] |= np.abs(g[sel][fin] - hi[fin]) <= tol * np.maximum(1, np.abs(hi[fin]))
+            if near.any():
+                out.append(group)
+        return out

@@ -1,0 +1,250 @@
+"""The independent check of a design: python-control state space, dense grids, every model.
+
+The optimiser works on port-coupled frequency responses on grids it refines itself; the check
+builds each regime model's closed loop as a state space (:func:`servotune.plant.build_plant`,
+with the digital drive's delays as Pade blocks), tests its poles, and evaluates compliance,
+chatter limit and both loops on grids offset from any the optimiser builds. Each requirement
+is then judged by :func:`requirement_checks`, one :class:`RequirementCheck` per requirement and
+model, so that the verdict, the JSON and the report all read the same list.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import frequency
+from ..plant import UnstableLoopError, build_plant, loop_transfer
+from ..regimes import RegimeModel
+from ..structure.model import signal_name
+from .problem import Design, TuningProblem
+
+__all__ = ["ModelPerformance", "Performance", "RequirementCheck", "verify",
+           "requirement_checks", "CHECK_TOLERANCE"]
+
+HZ = 1.0 / (2.0 * math.pi)
+#: Relative slack of the dense check on a requirement the optimiser imposed exactly (the grid
+#: exchange converges to this order; the gates of the hierarchy constraints are soft by a few
+#: percent, see :mod:`servotune.tuning.nlp`).
+CHECK_TOLERANCE = {"ms": 0.005, "ratio": 0.02}
+
+
+@dataclass(frozen=True)
+class ModelPerformance:
+    """What a design achieves with one regime model (SI; None where it does not apply)."""
+
+    model: RegimeModel
+    stable: bool
+    peak_compliance: float | None = None
+    peak_frequency: float | None = None
+    b_crit: float | None = None
+    velocity: frequency.LoopAnalysis | None = None
+    position: frequency.LoopAnalysis | None = None
+    reason: str = ""
+
+    def to_dict(self) -> dict:
+        return {**self.model.to_dict(), "stable": self.stable, "reason": self.reason or None,
+                "peak_compliance": self.peak_compliance,
+                "peak_frequency_hz": None if self.peak_frequency is None
+                else self.peak_frequency * HZ,
+                "b_crit_m": self.b_crit,
+                "velocity_loop": self.velocity.to_dict() if self.velocity else None,
+                "position_loop": self.position.to_dict() if self.position else None}
+
+
+@dataclass(frozen=True)
+class Performance:
+    """What a design achieves over every regime model.
+
+    ``peak_compliance`` is the worst over the cutting models (inf when one is unstable),
+    ``b_crit`` the smallest; ``velocity`` and ``position`` are the loops of the reference
+    model (the first moving one, where loop bandwidths mean something, else the first).
+    """
+
+    models: tuple[ModelPerformance, ...]
+    reference: int = 0
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def stable(self) -> bool:
+        return all(m.stable for m in self.models)
+
+    def _cutting(self):
+        return [m for m in self.models if m.model.cutting]
+
+    @property
+    def peak_compliance(self) -> float:
+        cut = self._cutting()
+        if any(not m.stable for m in cut):
+            return math.inf
+        return max(m.peak_compliance for m in cut)
+
+    @property
+    def peak_frequency(self) -> float:
+        cut = [m for m in self._cutting() if m.stable]
+        if not cut:
+            return math.nan
+        return max(cut, key=lambda m: m.peak_compliance).peak_frequency
+
+    @property
+    def worst_model(self) -> ModelPerformance | None:
+        cut = [m for m in self._cutting() if m.stable]
+        return max(cut, key=lambda m: m.peak_compliance) if cut else None
+
+    @property
+    def b_crit(self) -> float | None:
+        values = [m.b_crit for m in self._cutting() if m.b_crit is not None]
+        if any(not m.stable for m in self._cutting()):
+            return 0.0 if values else None
+        return min(values) if values else None
+
+    @property
+    def velocity(self) -> frequency.LoopAnalysis | None:
+        return self.models[self.reference].velocity
+
+    @property
+    def position(self) -> frequency.LoopAnalysis | None:
+        return self.models[self.reference].position
+
+    def to_dict(self) -> dict:
+        return {"peak_compliance": self.peak_compliance,
+                "peak_frequency_hz": self.peak_frequency * HZ,
+                "b_crit_m": self.b_crit, "stable": self.stable,
+                "reference_model": self.models[self.reference].model.name,
+                "velocity_loop": self.velocity.to_dict() if self.velocity else None,
+                "position_loop": self.position.to_dict() if self.position else None,
+                "models": [m.to_dict() for m in self.models]}
+
+
+def _offset_grid(lo: float, hi: float, n: int) -> np.ndarray:
+    """A log grid offset by a third of a step from any grid the optimiser builds."""
+    ratio = (hi / lo) ** (1.0 / (n - 1))
+    omega = lo * ratio ** (np.arange(n) + 1.0 / 3.0)
+    return omega[omega <= hi]
+
+
+def verify(problem: TuningProblem, design: Design) -> Performance:
+    """Performance of a design in every regime model, from the python-control state space on
+    dense grids that the optimiser never uses; an unstable model is reported, not raised."""
+    req = problem.requirements
+    drive = problem.drive_for(design)
+    band = _offset_grid(*req.band, 6001)
+    loop_omega = _offset_grid(*req.loop_band, 8001)
+    out = []
+    for model in problem.regimes:
+        contact = model.contact(design.c) if problem.pads else None
+        pads = problem.pads
+        plant = build_plant(problem.structure, drive, contact, pads)
+        try:
+            frequency.require_stable(plant, what=f"closed loop ({model.name})")
+        except UnstableLoopError as exc:
+            out.append(ModelPerformance(model, False, reason=str(exc)))
+            continue
+        peak = w_peak = b_crit = None
+        if model.cutting:
+            h = frequency.compliance(plant, band, force=signal_name(problem.force, "f_"),
+                                     output=signal_name(problem.force))
+            peak, w_peak = frequency.peak(band, h)
+            if problem.chatter is not None:
+                from ..chatter import critical_depth
+
+                b_crit = critical_depth(problem.chatter.mu * h.real, problem.chatter.kt, band)
+        velocity = position = None
+        if drive is not None:
+            try:
+                velocity = frequency.analyse_loop(
+                    loop_transfer(problem.structure, drive, contact, pads, "velocity"),
+                    loop_omega)
+                position = frequency.analyse_loop(
+                    loop_transfer(problem.structure, drive, contact, pads, "position"),
+                    loop_omega)
+            except UnstableLoopError as exc:
+                out.append(ModelPerformance(model, False, peak, w_peak, b_crit,
+                                            reason=f"{model.name}: {exc}"))
+                continue
+        out.append(ModelPerformance(model, True, peak, w_peak, b_crit, velocity, position))
+    moving = problem.moving_models
+    return Performance(tuple(out), moving[0] if moving else 0)
+
+
+@dataclass(frozen=True)
+class RequirementCheck:
+    """One requirement judged on the dense check of one model (or of the axis)."""
+
+    requirement: str
+    model: str | None
+    value: float | None
+    limit: float | None
+    holds: bool
+    text: str
+
+    def to_dict(self) -> dict:
+        return {"requirement": self.requirement, "model": self.model, "value": self.value,
+                "limit": self.limit, "holds": self.holds, "text": self.text}
+
+
+def requirement_checks(problem: TuningProblem, design: Design, performance: Performance,
+                       current_bandwidth: float | None) -> tuple[RequirementCheck, ...]:
+    """Every requirement of the problem judged on a verified performance."""
+    req = problem.requirements
+    out = []
+    moving = set(problem.moving_models)
+    for i, mp in enumerate(performance.models):
+        name = mp.model.name
+        if not mp.stable:
+            out.append(RequirementCheck("stability", name, None, None, False,
+                                        f"{name}: unstable ({mp.reason})"))
+            continue
+        out.append(RequirementCheck("stability", name, None, None, True, f"{name}: stable"))
+        for loop, la in (("velocity", mp.velocity), ("position", mp.position)):
+            if la is None:
+                continue
+            limit = req.ms_limit(loop)
+            out.append(RequirementCheck(
+                f"Ms {loop} loop", name, la.ms, limit, la.ms <= limit * (1 + CHECK_TOLERANCE["ms"]),
+                f"{name}: Ms of the {loop} loop {la.ms:.3f} (limit {limit:.3f})"))
+        if i not in moving or mp.velocity is None:
+            continue
+        bw_v, bw_p = mp.velocity.bandwidth, mp.position.bandwidth
+        slack = 1 - CHECK_TOLERANCE["ratio"]
+        if req.bandwidth_ratio_min > 0:
+            ratio = bw_v / bw_p if bw_p > 0 else math.inf
+            out.append(RequirementCheck(
+                "loop hierarchy", name, ratio, req.bandwidth_ratio_min,
+                bool(ratio >= req.bandwidth_ratio_min * slack),
+                f"{name}: velocity-loop bandwidth {bw_v * HZ:.3g} Hz is {ratio:.3g} times the "
+                f"position loop's {bw_p * HZ:.3g} Hz (at least {req.bandwidth_ratio_min:g})"))
+        ti = design.ti
+        if ti is not None and math.isfinite(bw_v) and (req.ti_bandwidth_min
+                                                       or req.ti_bandwidth_max):
+            value = ti * bw_v
+            lo_ok = value >= req.ti_bandwidth_min * slack
+            hi_ok = not req.ti_bandwidth_max or value <= req.ti_bandwidth_max / slack
+            out.append(RequirementCheck(
+                "Ti and velocity bandwidth", name, value,
+                req.ti_bandwidth_min if not lo_ok else (req.ti_bandwidth_max or None),
+                bool(lo_ok and hi_ok),
+                f"{name}: Ti times the velocity-loop bandwidth ({bw_v * HZ:.3g} Hz) is "
+                f"{value:.3g} (within [{req.ti_bandwidth_min:g}, "
+                f"{req.ti_bandwidth_max or math.inf:g}])"))
+        if req.current_bandwidth_ratio_min > 0 and current_bandwidth is not None:
+            ratio = current_bandwidth / bw_v if bw_v > 0 else math.inf
+            out.append(RequirementCheck(
+                "current loop above", name, ratio, req.current_bandwidth_ratio_min,
+                bool(ratio >= req.current_bandwidth_ratio_min * slack),
+                f"{name}: current-loop bandwidth {current_bandwidth * HZ:.3g} Hz is {ratio:.3g} "
+                f"times the velocity loop's (at least {req.current_bandwidth_ratio_min:g})"))
+    if problem.thrust is not None:
+        for case in problem.thrust.cases(design.c):
+            out.append(RequirementCheck(
+                "thrust", case.name, case.needed, case.usable, case.fits,
+                f"thrust at {case.name}: needs {case.needed / 1e3:.3g} kN of "
+                f"{case.usable / 1e3:.3g} kN usable ({case.thrust_kind}, "
+                f"{problem.thrust.margin:.0%} kept in reserve)"))
+    if design.kv is not None and req.kv_min > 0:
+        out.append(RequirementCheck("kv_min", None, design.kv, req.kv_min,
+                                    design.kv >= req.kv_min * (1 - 1e-9),
+                                    f"Kv {design.kv:.4g} 1/s (at least {req.kv_min:.4g})"))
+    return tuple(out)
