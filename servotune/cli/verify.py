@@ -1,24 +1,22 @@
-"""``servotune verify RESULT.json``: nonlinear checks of a tuned design against linear predictions.
+"""``servotune verify RESULT.json``: does the nonlinear axis do what the design claims?
 
 RESULT.json holds at least ``{"axis": "path/to/axis", "design": {"c": ..., "kv": ..., "kp": ...,
-"ti": ...}}`` (SI; a relative axis path is taken from the file's folder, then from the current
-folder). The design is simulated with LuGre friction at the pads (sigma2 = C) under sine sweeps
-standing still, and each sweep's resonance and peak are compared with the closed loop with
-locked pads, with viscous pads C and with the LuGre describing function at the simulated pad
-amplitude.
+"ti": ...}}`` (SI; the file ``servotune tune`` writes; a relative axis path is taken from the
+file's folder, then from the current folder). The design is checked on the axis' linear regime
+models (dense grids, python-control) and simulated with LuGre friction at the pads (sigma2 =
+C): sine sweeps standing still and while feeding, at the process force and a smaller and a
+larger one unless ``--force-pp`` says otherwise, over the band of the axis unless
+``--f-start-hz``/``--f-end-hz`` say otherwise, at the axis' feed speeds unless ``--speed`` says
+otherwise (see :mod:`servotune.verdict`). Exit status 0 when verified, 1 when not.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from ..simulate.verify import DEFAULT_FORCES, design_setup, verify_design
 from ._common import add_output_options, print_json
-from .table3 import load_setup
 
 __all__ = ["add_parser", "run", "read_result"]
 
@@ -53,59 +51,100 @@ def read_result(path) -> tuple[Path, dict]:
     return axis, values
 
 
+def _positive(name):
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise ValueError(f"{name} takes a positive number, got {text!r}") from None
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} takes a positive number, got {text!r}")
+        return value
+    return parse
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "verify", help="nonlinear (LuGre) checks of a tuned design vs the linear predictions",
-        description="Simulate a tuned design (RESULT.json with 'axis' and 'design' {c, kv, kp, "
-                    "ti}) with LuGre guide-way friction (sigma2 = C) under sine sweeps standing "
-                    "still, and compare resonance and peak oscillation per force with the "
-                    "closed loop with locked pads, viscous pads C, and the describing function "
-                    "at the simulated pad amplitude.")
+        "verify", help="does the nonlinear axis (LuGre) do what a tuned design claims?",
+        description="Check a tuned design (RESULT.json of servotune tune: 'axis' and 'design' "
+                    "{c, kv, kp, ti}) on the axis' linear regime models and simulate it with "
+                    "LuGre friction at the pads (sigma2 = C): sine sweeps standing still and "
+                    "while feeding, at the process force and a smaller and a larger one, over "
+                    "the band of the axis; the verdict per regime. Exit status 0 verified, "
+                    "1 not verified.")
     p.add_argument("result", help="tuning results file (JSON)")
-    p.add_argument("--force-pp", type=float, action="append", default=None, metavar="N",
-                   help=f"sweep force peak to peak [N], repeatable (default {DEFAULT_FORCES})")
-    p.add_argument("--duration", type=float, default=20.0, help="sweep time [s] (default 20)")
-    p.add_argument("--f-start-hz", type=float, default=10.0)
-    p.add_argument("--f-end-hz", type=float, default=100.0)
+    p.add_argument("--force-pp", type=_positive("--force-pp"), action="append", default=None,
+                   metavar="N", help="sweep force peak to peak [N], repeatable (default: the "
+                                     "process force and a smaller and a larger one)")
+    p.add_argument("--speed", type=_positive("--speed"), action="append", default=None,
+                   metavar="V", help="feed speed [m/s] of a feeding regime, repeatable "
+                                     "(default: the axis' feed speeds)")
+    p.add_argument("--f-start-hz", type=_positive("--f-start-hz"), default=None,
+                   help="sweep start [Hz] (default: from the axis' band and modes)")
+    p.add_argument("--f-end-hz", type=_positive("--f-end-hz"), default=None,
+                   help="sweep end [Hz] (default: from the axis' band and modes)")
     p.add_argument("--workers", type=int, default=1, help="parallel processes (default 1)")
     add_output_options(p, default_out=None)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    axis, design = read_result(args.result)
-    forces = tuple(args.force_pp) if args.force_pp else DEFAULT_FORCES
-    if any(not (f > 0 and math.isfinite(f)) for f in forces):
-        raise ValueError("--force-pp must be positive forces [N]")
+    from ..axis import load_axis
+    from ..design import check_design
+    from ..tuning import Design
+    from ..verdict import nonlinear_verdict
+
+    axis_path, values = read_result(args.result)
     if args.workers < 1:
-        raise ValueError("--workers must be >= 1")
-    setup = design_setup(load_setup(axis), **design)
-    kwargs = dict(forces=forces, f_start_hz=args.f_start_hz, f_end_hz=args.f_end_hz,
-                  duration=args.duration)
+        raise ValueError("--workers must be a whole number >= 1")
+    band = None
+    if (args.f_start_hz is None) != (args.f_end_hz is None):
+        raise ValueError("give both --f-start-hz and --f-end-hz, or neither")
+    if args.f_start_hz is not None:
+        if not args.f_start_hz < args.f_end_hz:
+            raise ValueError("--f-start-hz must be below --f-end-hz")
+        band = (args.f_start_hz, args.f_end_hz)
+    axis = load_axis(axis_path)
+    if axis.drive is None or axis.friction is None:
+        raise ValueError(f"{axis.file}: the nonlinear verification needs [drive] and [friction]")
+    design = Design(**values)
+    result = check_design(axis, design)
+    executor = None
     if args.workers > 1:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            result = verify_design(setup, executor=pool, **kwargs)
-    else:
-        result = verify_design(setup, **kwargs)
-    result["axis"] = str(axis)
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(max_workers=args.workers)
+    try:
+        verdict = nonlinear_verdict(axis, result, executor=executor, forces=args.force_pp,
+                                    band_hz=band, speeds=args.speed, simulate_before=False)
+    finally:
+        if executor is not None:
+            executor.shutdown()
+    rows = [s.to_dict() for r in verdict.regimes for s in r.simulations]
+    out = {"axis": str(axis.path), "axis_name": axis.name, "design": design.to_dict(),
+           "verified": verdict.verified, "reasons": list(verdict.reasons),
+           "regimes": [r.to_dict() for r in verdict.regimes], "rows": rows,
+           "checks": [c.to_dict() for c in result.checks]}
+    status = 0 if verdict.verified else 1
     if args.json:
-        print_json(result)
-        return 0
-    d = result["design"]
-    print(f"design on {axis}: C = {d['c']:.4g} N s/m, Kv = {d['kv']:.4g} 1/s, "
-          f"Kp = {d['kp']:.4g} N m s/rad, Ti = {d['ti']:.4g} s")
-    for name, pred in result["linear"].items():
-        print(f"  linear, pads {name:8}: resonance {pred['resonance_hz']:6.1f} Hz, peak "
-              f"{pred['peak_m_per_n']:.3g} m/N")
-    for row in result["sweeps"]:
-        dfp = row["describing"]
-        print(f"  LuGre sweep {row['force_pp_n']:g} N p-p: resonance {row['resonance_hz']:.1f} Hz"
-              f", peak {row['peak_m_per_n']:.3g} m/N, pad amplitude {row['pad_amplitude_m']:.3g} m"
-              f"; describing function there: {dfp['resonance_hz']:.1f} Hz, "
-              f"{dfp['peak_m_per_n']:.3g} m/N")
-        verdict = ", ".join(f"{n} {'agrees' if row[f'agrees_{n}'] else 'differs'}"
-                            for n in ("locked", "presliding", "viscous", "describing"))
-        print(f"    {verdict} (within {result['freq_tol']:.0%} in frequency and "
-              f"{result['peak_tol']:.0%} in peak)")
-    sys.stdout.flush()
-    return 0
+        print_json(out)
+        return status
+    d = design
+    print(f"design on {axis.name}: C = {d.c:.4g} N s/m"
+          + ("" if d.kv is None else f", Kv = {d.kv:.4g} 1/s, Kp = {d.kp:.4g} N m s/rad, "
+                                     f"Ti = {d.ti:.4g} s"))
+    for r in verdict.regimes:
+        print(f"  {r.name}: claim {r.claimed_peak if r.claimed_peak is None else f'{r.claimed_peak:.3g}'} "  # noqa: E501
+              f"m/N; {'holds' if r.holds else 'does NOT hold: ' + r.reason}")
+        for s in r.simulations:
+            if s.kind == "sweep":
+                peak = "failed" if s.peak is None else (f"peak {s.peak:.3g} m/N at "
+                                                        f"{s.resonance_hz:.1f} Hz")
+                print(f"    sweep {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz at "
+                      f"{s.force_pp:.4g} N p-p, {s.speed * 1e3:.3g} mm/s: {peak}")
+            else:
+                print(f"    fed at {s.speed * 1e3:.3g} mm/s without force: "
+                      + ("stick-slip" if s.stick_slip else "slides steadily"))
+    print(("VERIFIED" if verdict.verified else "NOT VERIFIED") + (
+        "" if verdict.verified else ": " + "; ".join(verdict.reasons)))
+    return status

@@ -1,0 +1,262 @@
+"""Designs a machine builder can build: the digital drive's delays, the thrust budget, the loop
+hierarchy, and the regimes the axis works in; each against a hand computation or a second
+method written out here."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from axis_fixtures import PADS, small_axis, small_drive
+from numpy.testing import assert_allclose
+
+from servotune import frequency
+from servotune.axis import load_axis
+from servotune.drive import PIController, Sampling, cascade_response, pade_delay, pade_order
+from servotune.friction import LuGreParameters
+from servotune.plant import Contact, loop_transfer
+from servotune.regimes import Operation, RegimeModel
+from servotune.tuning import Design, Requirements, ResponseModel, TuningProblem, tune
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+HZ = 1.0 / (2.0 * math.pi)
+
+
+# ------------------------------------------------------------------------- the digital drive
+@pytest.mark.parametrize("delay", [62.5e-6, 187.5e-6, 1.5e-3])
+def test_pade_block_is_all_pass_and_holds_the_phase_within_its_tolerance(delay):
+    # exp(-j w T) has gain 1 and phase -w T; the Pade block of the order pade_order picks
+    # matches it to 1 deg up to min(w_max, pi/T)
+    w_max = 2 * math.pi * 3000.0
+    block = pade_delay(delay, pade_order(delay, w_max), "u", "y", "d")
+    w = np.linspace(1.0, min(w_max, math.pi / delay), 400)
+    z = np.array([complex(block(1j * x)) for x in w])
+    assert_allclose(np.abs(z), 1.0, rtol=1e-9)
+    error = np.degrees(np.angle(z * np.exp(1j * w * delay)))
+    assert np.abs(error).max() <= 1.0
+
+
+def test_the_phase_lost_at_the_velocity_crossover_is_omega_times_the_loop_delay():
+    # the velocity loop L = a M_v s P / (den + b s P) carries the controller's output delay D_v
+    # in a and the speed measurement's half-period delay in M_v: with the current loop kept
+    # continuous, L_digital = L_continuous exp(-j w (1.5 T_v + 0.5 T_v)) exactly, so the phase
+    # lost at the crossover is w_c x 2 T_v (here 250 us), to the Pade blocks' 1 deg
+    structure = small_axis()
+    t_v = 125e-6
+    continuous = small_drive()
+    digital = small_drive(sampling=Sampling(current_period=0.0, velocity_period=t_v,
+                                            position_period=0.0, computation_delay=1.0))
+    omega = 2 * math.pi * np.geomspace(1.0, 3000.0, 6000)
+    contact = Contact.viscous(5e4)
+    lc = loop_transfer(structure, continuous, contact, PADS, "velocity")
+    ld = loop_transfer(structure, digital, contact, PADS, "velocity")
+    ac = frequency.analyse_loop(lc, omega)
+    ad = frequency.analyse_loop(ld, omega)
+    wc = ad.crossover
+    hc = complex(frequency.fast_frequency_response(lc, [wc]).complex.ravel()[0])
+    hd = complex(frequency.fast_frequency_response(ld, [wc]).complex.ravel()[0])
+    assert abs(hd) == pytest.approx(abs(hc), rel=1e-6)       # gain unchanged: all-pass
+    lost = math.degrees(np.angle(hc / hd))
+    assert lost == pytest.approx(math.degrees(wc * 2 * t_v), abs=1.0)
+    assert ad.phase_margin_deg < ac.phase_margin_deg - 5.0   # margins include the delays
+
+
+def test_exact_and_pade_delays_agree_in_the_port_model_where_the_pade_holds():
+    drive = small_drive(sampling=Sampling())
+    s = 2j * math.pi * np.geomspace(1.0, 300.0, 50)
+    exact = cascade_response(drive, s, exact_delays=True)
+    pade = cascade_response(drive, s, exact_delays=False)
+    for name in ("current_forward", "setpoint", "speed_measurement", "position_delay"):
+        a, b = getattr(exact, name), getattr(pade, name)
+        assert np.degrees(np.abs(np.angle(a / b))).max() <= 1.0
+        assert_allclose(np.abs(a), np.abs(b), rtol=1e-9)
+
+
+# ---------------------------------------------------------------------- thrust budget, C
+@pytest.fixture(scope="module")
+def bundled():
+    """The bundled axis tuned once (linear checks only)."""
+    from servotune.design import tune_axis
+
+    axis = load_axis(MODELS / "paper_x_axis")
+    return axis, tune_axis(axis, starts=2)
+
+
+def test_the_tuned_bundled_axis_fits_its_motor_by_hand(bundled):
+    # calibration.json / README: 14,300 kg referred to the slide (0.0362 kg m^2 at the motor
+    # over r^2); friction at rapid: Fc (the Stribeck term has decayed: exp(-50) at 0.5 m/s);
+    # the design's C at the rapid speed; 1 m/s^2; 20 % of 90 N m / r kept in reserve
+    axis, job = bundled
+    r = axis.drive.ratio
+    mass = 0.0362 / r**2
+    v_rapid = 3000 * 2 * math.pi / 60 * r
+    c = job.design.c
+    needed_rapid = 2198.0 + c * v_rapid + mass * 1.0
+    assert needed_rapid <= 0.8 * 90.0 / r
+    rapid = next(x for x in job.thrust_after["cases"] if x["name"] == "rapid traverse")
+    assert rapid["needed_n"] == pytest.approx(needed_rapid, rel=2e-3)
+    for v in (1e-4 * 4 * 1000 / 60, 1e-4 * 4 * 6000 / 60):   # feed per tooth x teeth x rpm
+        g = 2198.0 + (6013.0 - 2198.0) * math.exp(-v / 0.01)
+        needed_feed = g + c * v + 67.3                          # + the mean cutting force
+        assert needed_feed <= 0.8 * 27.0 / r
+    assert job.thrust_after["fits"] is True
+
+
+def test_the_tuned_bundled_axis_keeps_the_loop_hierarchy_by_hand(bundled):
+    # closed-loop bandwidths of both loops of the feeding model, from python-control's
+    # frequency response of the state space (with the Pade delays) on a dense grid
+    axis, job = bundled
+    d, problem = job.design, job.result.problem
+    drive = problem.drive_for(d)
+    assert drive.sampling is not None and not drive.sampling.is_continuous
+    omega = 2 * math.pi * np.geomspace(0.05, 3000.0, 30000)
+    for m in problem.moving_models:
+        contact = problem.regimes[m].contact(d.c)
+        bw = {}
+        for loop in ("velocity", "position"):
+            lt = loop_transfer(axis.structure, drive, contact, axis.pads, loop)
+            h = frequency.fast_frequency_response(lt, omega).complex.ravel()
+            t = np.abs(h / (1 + h))
+            bw[loop] = omega[np.nonzero(t < t[0] / math.sqrt(2))[0][0]]
+        assert bw["velocity"] >= 4.0 * bw["position"] * 0.98
+        reported = job.loops_after.to_dict() if m == problem.moving_models[0] else None
+        if reported:
+            assert reported["velocity_loop"]["bandwidth_hz"] == pytest.approx(
+                bw["velocity"] * HZ, rel=0.01)
+
+
+def test_a_weaker_converter_lowers_the_tuned_damping_and_says_the_thrust_binds():
+    # the table axis wants more guide-way damping than either drive allows; the budget caps
+    # C at (0.8 T_peak / r - Fc - m a) / v_rapid, by hand from the axis data
+    from servotune.design import tune_axis
+    from servotune.thrust import moving_mass
+
+    examples = Path(__file__).resolve().parents[1] / "examples" / "data" / "table_axis"
+    out = {}
+    for name, path, torque in (("strong", examples, 36.0),
+                               ("weak", MODELS / "weak_motor_axis", 18.0)):
+        axis = load_axis(path)
+        job = tune_axis(axis, starts=1, bounds={"ti": (1e-3, 0.1)})
+        r, p = axis.drive.ratio, axis.friction.lugre
+        v = axis.drive.speed_max
+        mass = moving_mass(axis.structure, axis.pads)
+        c_max = (0.8 * torque / r - p.fc - mass * 2.0) / v   # exp(-(v/vs)^delta) is ~1e-36
+        assert job.design.c == pytest.approx(c_max, rel=1e-4)
+        assert "thrust: rapid traverse" in job.result.active
+        out[name] = job.design.c
+    assert out["weak"] < 0.5 * out["strong"]
+
+
+def test_two_mass_fig5_keeps_copt_without_a_budget():
+    from servotune import twomass
+    from servotune.design import tune_axis
+
+    job = tune_axis(load_axis(MODELS / "two_mass_fig5"), starts=2)
+    assert job.thrust_after is None
+    system = twomass.TwoMassSystem(m1=5000.0, k=16e6, alpha=0.3)
+    assert job.design.c == pytest.approx(twomass.optimal_damping(system), rel=1e-4)
+    assert job.verified
+
+
+# --------------------------------------------------------------------------------- regimes
+def _small_friction():
+    return LuGreParameters(fc=300.0, fs=600.0, vs=0.01, delta=1.0, sigma0=1e9, sigma1=2e6,
+                           sigma2=2e3, sigma1_decay_speed=1e-3)
+
+
+def test_the_sliding_model_is_the_slope_of_the_stribeck_curve_at_low_frequency():
+    # LuGre linearised about steady sliding: Z(jw)/(jw) -> dF_ss/dv as w -> 0, negative below
+    # the Stribeck speed: g'(v) = -(Fs - Fc) exp(-v/vs) / vs
+    p = _small_friction()
+    for v in (0.005, 0.05):
+        model = RegimeModel("feeding", "sliding", p, speed=v)
+        z = model.impedance([1e-3])[0] / 1e-3j
+        slope = -(600.0 - 300.0) * math.exp(-v / 0.01) / 0.01
+        assert z.real == pytest.approx(slope, rel=1e-5)
+        assert model.slope() == pytest.approx(slope, rel=1e-9)
+
+
+def test_feeding_below_the_stribeck_speed_is_flagged_and_stick_slip_confirmed(tmp_path):
+    # the starter axis fed at 2 mm/s: the friction slope there, -(Fs - Fc)/vs exp(-0.2) =
+    # -3.1e5 N s/m, is far more negative than any damping the design may add; no candidate
+    # keeps the sliding model stable, the tuning leaves it out by name and the time simulation
+    # of the axis fed at that speed without force shows the pads sticking and slipping
+    from servotune.design import tuning_problem
+    from servotune.template import write_template
+    from servotune.tuning.solve import _exclusion_reason, stable_starts
+    from servotune.verdict import design_axis, simulate_feeding
+
+    write_template(tmp_path)
+    text = (tmp_path / "axis.toml").read_text()
+    (tmp_path / "axis.toml").write_text(text.replace("# feed_speeds = [0.01, 0.05]",
+                                                     "feed_speeds = [0.002, 0.08]"))
+    axis = load_axis(tmp_path)
+    problem = tuning_problem(axis)
+    slow = next(i for i, m in enumerate(problem.regimes) if m.kind == "sliding"
+                and m.speed == 0.002)
+    slope = -(6013.0 - 2198.0) / 0.01 * math.exp(-0.2)
+    assert problem.regimes[slow].slope() == pytest.approx(slope, rel=1e-9)
+    starts = stable_starts(problem, 1)
+    assert slow in starts.excluded
+    assert "slope" in _exclusion_reason(problem.regimes[slow])
+    sim = simulate_feeding(design_axis(axis, problem, problem.initial_design()), 0.002,
+                           {"regime": "feeding 2 mm/s", "design": "before"})
+    assert sim.stick_slip is True
+
+
+def test_the_verdict_sweeps_where_the_resonance_is_and_flags_a_band_that_misses_it(tmp_path):
+    # the starter axis resonates near 112 Hz, outside the paper's 10-100 Hz sweep: the
+    # verdict's band holds it (not at an edge); a 10-100 Hz band puts the peak at its edge,
+    # which is flagged, never passed
+    from servotune.design import check_design
+    from servotune.template import write_template
+    from servotune.verdict import nonlinear_verdict
+
+    write_template(tmp_path)
+    axis = load_axis(tmp_path)
+    result = check_design(axis, Design(c=5578.0, kv=45.7, kp=3.03, ti=0.0105))
+    wide = nonlinear_verdict(axis, result, forces=(268.0,), speeds=[], simulate_before=False)
+    standing = wide.regimes[0]
+    sweep = next(s for s in standing.simulations if s.kind == "sweep")
+    assert standing.band_hz[0] <= 10.0 and standing.band_hz[1] >= 200.0
+    assert 100.0 < sweep.resonance_hz < 125.0 and not sweep.at_edge
+    assert standing.holds, standing.reason
+    narrow = nonlinear_verdict(axis, result, forces=(268.0,), speeds=[], band_hz=(10.0, 100.0),
+                               simulate_before=False)
+    assert not narrow.verified and "edge" in narrow.regimes[0].reason
+
+
+def test_the_multi_model_optimum_beats_every_single_regime_design_in_the_worst_case():
+    # two regime models of a small axis (presliding and sliding pads); C and Kp free; a brute
+    # force over a grid evaluates each design in BOTH models under the same Ms limits; the
+    # multi-model tuning is at least as good as the best single-model design's worst case
+    p = _small_friction()
+    models = (RegimeModel("standing", "presliding", p),
+              RegimeModel("feeding 50 mm/s", "sliding", p, speed=0.05))
+    req = Requirements(ms_velocity_max=1.6, ms_position_max=1.5, bandwidth_ratio_min=0,
+                       current_bandwidth_ratio_min=0, ti_bandwidth_min=0, ti_bandwidth_max=0)
+    structure, drive = small_axis(), small_drive()
+    kw = dict(structure=structure, pads=PADS, c=5e3, drive=drive, free=("c", "kp"),
+              requirements=req, bounds={"c": (2e3, 2e6), "kp": (0.5, 20.0)}, mean_weight=0.0)
+    multi = tune(TuningProblem(regimes=models, **kw), starts=2)
+    assert multi.success, multi.reasons
+    band = ResponseModel(TuningProblem(regimes=models, **kw), np.geomspace(*req.band, 800))
+    loop = ResponseModel(TuningProblem(regimes=models, **kw), np.geomspace(*req.loop_band, 800))
+    x0 = drive
+
+    def worst(design):
+        loops = loop(design)
+        for key in ("velocity", "position"):
+            if np.abs(1 + loops[f"loop_{key}"]).min() < 1 / req.ms_limit(key):
+                return math.inf
+        return float(np.abs(band(design)["compliance"]).max())
+
+    singles = []
+    for model in models:
+        single = tune(TuningProblem(regimes=(model,), **kw), starts=2)
+        singles.append(worst(single.design))
+    grid_best = min(worst(Design(c, x0.kv, kp, x0.velocity_loop.ti))
+                    for c in np.geomspace(2e3, 2e6, 25) for kp in np.geomspace(0.5, 20.0, 25))
+    tuned = worst(multi.design)
+    assert tuned <= min(singles) * (1 + 1e-6)
+    assert tuned <= grid_best * (1 + 1e-3)
