@@ -121,7 +121,9 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help, --version, or a usage error (already printed)
         return exc.code if isinstance(exc.code, int) else 2
     if not getattr(args, "func", None):
-        parser.print_help()
+        parser.print_usage(sys.stderr)
+        print("servotune: error: give a COMMAND ('servotune --help' lists them)",
+              file=sys.stderr)
         return 2
     label = _label(args)
     try:

@@ -81,7 +81,7 @@ def run(args) -> int:
                                 window=(0.1 * args.duration, args.duration))
     workers = args.workers or default_workers()
     with progress.task(f"Table 3 sine sweeps on {setup.name}", total=len(t3.TRIALS),
-                       unit="trial") as task:
+                       unit="trials") as task:
         if workers == 1:
             table = t3.table3(setup, None, settings=settings, progress=task.report)
         else:
