@@ -66,6 +66,7 @@ __all__ = [
     "print_json",
     # missing sections
     "require_section",
+    "default_notes",
 ]
 
 DEFAULT_OUT = "out"
@@ -314,6 +315,18 @@ def require_section(axis, attribute: str, section: str, command: str, fix: str =
         toml = f"{Path(where) / 'axis.toml'}" if where is not None else f"axis {axis.name!r}"
         raise CliError(f"{toml} has no {section} section, which {command} needs: add it "
                        f"(servotune init DIR writes a commented example){fix}")
+
+
+def default_notes(axis, sections=("requirements",)) -> list[str]:
+    """One line per optional section that ``axis`` omits, saying which default stands in
+    (for the text output and the ``notes`` of the JSON)."""
+    notes = []
+    present = set(getattr(axis, "tables", {}) or {})
+    if "requirements" in sections and "requirements" not in present:
+        lo, hi = (w / (2.0 * math.pi) for w in axis.requirements.band)
+        notes.append(f"no [requirements] section: the default band {lo:g}-{hi:g} Hz of the "
+                     "compliance peak")
+    return notes
 
 
 # --- the output policy -------------------------------------------------------------------------

@@ -7,6 +7,7 @@ from ._common import (
     add_common_options,
     add_contact_options,
     contact_from_args,
+    default_notes,
     print_json,
     save_figure,
     write_results,
@@ -45,7 +46,7 @@ def run(args) -> int:
     contact = contact_from_args(axis, args)
     controlled = axis.drive is not None
     fig9 = axis.friction is not None
-    notes = []
+    notes = default_notes(axis)
     if not controlled:
         notes.append("no [drive] section: the compliance of the structure without motion "
                      "control")

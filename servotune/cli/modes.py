@@ -10,7 +10,14 @@ from __future__ import annotations
 
 import math
 
-from ._common import COUNT, RunOutput, add_common_options, print_json, write_results
+from ._common import (
+    COUNT,
+    RunOutput,
+    add_common_options,
+    default_notes,
+    print_json,
+    write_results,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -64,6 +71,7 @@ def run(args) -> int:
         "wp_x_peak_compliance": None if peak is None else peak["wp_x_peak_compliance"],
         "wp_x_peak_hz": None if peak is None else peak["wp_x_peak_hz"],
         "band_hz": [band[0] * HZ, band[1] * HZ],
+        "notes": default_notes(axis),
         "folder": str(out.path),
     }
     with out.writing() as folder:
@@ -84,5 +92,7 @@ def run(args) -> int:
     if peak is not None:
         print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
               f"{peak['wp_x_peak_hz']:.2f} Hz ({band[0] * HZ:g}-{band[1] * HZ:g} Hz)")
+        for note in result["notes"]:
+            print(f"  note: {note}")
     print(f"  wrote {out.path}")
     return 0
