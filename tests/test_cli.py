@@ -355,3 +355,43 @@ def test_one_default_per_notion(command):
     for old in ("--sweep-duration",):
         action = _option(parser, old)
         assert action is None or action.help == "==SUPPRESS==", old
+
+
+def test_helpers_for_the_tune_and_verify_rework():
+    import argparse
+
+    from servotune.cli._common import (
+        STARTS,
+        add_common_options,
+        add_duration_option,
+        add_workers_option,
+        default_workers,
+    )
+
+    parser = argparse.ArgumentParser(prog="servotune tune")
+    parser.add_argument("--starts", type=STARTS, default=4)
+    add_duration_option(parser, aliases=("--sweep-duration",))
+    add_workers_option(parser)
+    add_common_options(parser, plots=True)
+    args = parser.parse_args(["--sweep-duration", "4", "--starts", "2"])
+    assert args.duration == 4.0 and args.starts == 2 and args.workers is None
+    assert args.out == Path("out") and not args.no_plots
+    assert "--sweep-duration" not in parser.format_help()
+    for bad in (["--starts", "0"], ["--starts", "-5"], ["--starts", "1000000"],
+                ["--sweep-duration", "0"], ["--workers", "0"]):
+        with pytest.raises(SystemExit):
+            parser.parse_args(bad)
+    assert default_workers() >= 1
+
+
+@pytest.mark.parametrize("quiet, as_json, tty, shown", [
+    (False, False, True, True), (True, False, True, False), (False, True, True, False),
+    (False, False, False, False)])
+def test_progress_only_on_a_terminal_without_quiet_or_json(quiet, as_json, tty, shown,
+                                                           monkeypatch):
+    import argparse
+
+    from servotune.cli._common import show_progress
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: tty, raising=False)
+    assert show_progress(argparse.Namespace(quiet=quiet, json=as_json)) is shown

@@ -17,6 +17,30 @@ accepted and an example.
 
 The library is imported inside functions only, so that ``servotune --help`` and argument
 errors stay fast.
+
+A command adopts all of it like this (``tune``, for example)::
+
+    def add_parser(subparsers):
+        p = subparsers.add_parser("tune", help=...)
+        p.add_argument("axis")
+        p.add_argument("--starts", type=STARTS, default=4)
+        add_duration_option(p, aliases=("--sweep-duration",))
+        add_workers_option(p)
+        add_common_options(p, plots=True)
+        p.set_defaults(func=run)
+
+    def run(args):
+        from .. import interrupt, progress
+        with progress.task(f"loading {args.axis}"):
+            from ..axis import load_axis
+            axis = load_axis(args.axis)
+        require_section(axis, "friction", "[friction]", "servotune tune")
+        out = RunOutput.for_args(args, "tune", axis.name, ["report.html", "results.json"])
+        with interrupt.process_pool(args.workers or default_workers()) as pool:
+            job = ...                                  # the work, reporting progress
+        with out.writing() as folder:                  # all or nothing, swapped in at the end
+            report.write_html_report(job, folder)
+            write_results(folder, results)
 """
 
 from __future__ import annotations

@@ -46,14 +46,18 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..axis import load_axis
+    from .. import progress
 
-    axis = load_axis(args.axis)
+    with progress.task(f"loading {args.axis}"):
+        from ..axis import load_axis
+
+        axis = load_axis(args.axis)
     out = RunOutput.for_args(args, "modes", axis.name, ["results.json"])
     model = axis.configuration(pads=args.pads, motor=args.motor)
-    omega = model.natural_frequencies()
-    zeta = model.modal_damping_ratios()
-    share = model.participation(WP_X)
+    with progress.task(f"{axis.name}: modes of {model.n} DOFs"):
+        omega = model.natural_frequencies()
+        zeta = model.modal_damping_ratios()
+        share = model.participation(WP_X)
     j = int(share.argmax())
     rigid = int((omega == 0).sum())
     band = axis.requirements.band
