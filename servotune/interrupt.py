@@ -28,14 +28,18 @@ False
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
-__all__ = ["Interrupted", "handling", "requested", "check", "clear", "ignore_in_worker",
-           "process_pool", "casadi_iteration_callback"]
+__all__ = ["Interrupted", "handling", "requested", "check", "clear", "restore_stderr",
+           "ignore_in_worker", "process_pool", "casadi_iteration_callback"]
 
 _flag = threading.Event()
+_mute = False          # silence native code's stderr once Ctrl-C is pressed (handling(...))
+_saved_stderr = None   # the real file descriptor 2 while it is silenced
 
 
 class Interrupted(KeyboardInterrupt):
@@ -46,28 +50,75 @@ class Interrupted(KeyboardInterrupt):
         self.what = what
 
 
+def _silence_stderr() -> None:
+    """Send file descriptor 2 to the null device until :func:`restore_stderr`."""
+    global _saved_stderr
+    if _saved_stderr is not None:
+        return
+    try:
+        with contextlib.suppress(Exception):
+            sys.stderr.flush()
+        saved = os.dup(2)
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 2)
+        os.close(null)
+        _saved_stderr = saved
+    except OSError:  # no file descriptor 2 to silence
+        pass
+
+
+def restore_stderr() -> None:
+    """Give file descriptor 2 back after an interruption silenced it (see :func:`handling`);
+    call it before printing what was interrupted."""
+    global _saved_stderr
+    if _saved_stderr is None:
+        return
+    with contextlib.suppress(Exception):
+        sys.stderr.flush()
+    os.dup2(_saved_stderr, 2)
+    os.close(_saved_stderr)
+    _saved_stderr = None
+
+
 def _on_sigint(signum, frame):
     _flag.set()
+    if _mute:
+        _silence_stderr()
     raise KeyboardInterrupt
 
 
 @contextlib.contextmanager
-def handling() -> Iterator[None]:
+def handling(silence_native_stderr: bool = False) -> Iterator[None]:
     """Inside the block, Ctrl-C raises ``KeyboardInterrupt`` as usual and also sets the flag
     of :func:`requested`. Outside the main thread, or when another handler than Python's
-    default one is installed, the block changes nothing (the flag is still cleared on entry)."""
+    default one is installed, the block changes nothing (the flag is still cleared on entry).
+
+    Parameters
+    ----------
+    silence_native_stderr : bool
+        From the Ctrl-C on, send standard error (file descriptor 2) to the null device until
+        :func:`restore_stderr` or the end of the block: native code that the interruption
+        passes through writes its own lines there (scipy's f2py callbacks "capi_return is
+        NULL", casadi's "KeyboardInterruptException"), and a command wants to end with one
+        line of its own. The ``servotune`` command sets it.
+    """
+    global _mute
     _flag.clear()
     installed = False
+    muted = _mute
     if threading.current_thread() is threading.main_thread():
         previous = signal.getsignal(signal.SIGINT)
         if previous in (signal.default_int_handler, _on_sigint):
             signal.signal(signal.SIGINT, _on_sigint)
             installed = True
+            _mute = silence_native_stderr
     try:
         yield
     finally:
         if installed:
             signal.signal(signal.SIGINT, previous)
+            _mute = muted
+        restore_stderr()
 
 
 def requested() -> bool:

@@ -102,9 +102,11 @@ def _known_gap(path, value) -> bool:
     return False
 
 
-@pytest.mark.parametrize("path, value, reason", KNOWN_GAPS)
-def test_known_gaps_of_the_loader(path, value, reason):
-    pytest.xfail(reason) if _known_gap(path, value) else None
+@pytest.mark.parametrize("path, value", [
+    pytest.param(path, value, marks=pytest.mark.xfail(reason=reason, strict=True))
+    for path, value, reason in KNOWN_GAPS])
+def test_known_gaps_of_the_loader(path, value):
+    assert _known_gap(path, value)  # (the property above leaves these out)
     data = _copy(TEMPLATE)
     _set(data, path, value)
     with pytest.raises(AxisFormatError) as info:

@@ -9,6 +9,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from servotune import interrupt
@@ -105,3 +106,38 @@ def test_the_command_exits_130_on_ctrl_c_with_one_line_and_no_partial_results(tm
     assert len(lines) == 1 and lines[0].startswith("servotune table3: interrupted"), stderr
     assert "nothing was written" in lines[0] and stdout == ""
     assert not out.exists() or not any(out.iterdir())
+
+
+def _schur_interrupted_in_its_callback():
+    """Ctrl-C pressed while scipy's Schur sort callback (f2py) runs, as in a loop analysis."""
+    from scipy.linalg import schur
+
+    calls = []
+
+    def select(x):
+        calls.append(x)
+        if len(calls) == 10:
+            os.kill(os.getpid(), signal.SIGINT)  # delivered at the next bytecode, in here
+        return x.real < 0
+
+    a = np.random.default_rng(1).normal(size=(30, 30))
+    with pytest.raises(KeyboardInterrupt):
+        schur(a, output="complex", sort=select)
+
+
+def test_native_noise_after_ctrl_c_is_silenced(capfd):
+    # scipy's f2py callbacks print "capi_return is NULL" / "Call-back ... failed." on fd 2 when
+    # Ctrl-C lands inside them; the command wants only its own line
+    with interrupt.handling(silence_native_stderr=True):
+        _schur_interrupted_in_its_callback()
+        os.write(2, b"still silenced\n")
+        interrupt.restore_stderr()
+        os.write(2, b"after restore\n")
+    assert capfd.readouterr().err == "after restore\n"
+
+
+def test_without_silencing_the_noise_is_there(capfd):
+    # the reference: the same interruption without silence_native_stderr
+    with interrupt.handling():
+        _schur_interrupted_in_its_callback()
+    assert "Call-back" in capfd.readouterr().err

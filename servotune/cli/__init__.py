@@ -127,10 +127,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     label = _label(args)
     try:
-        with interrupt.handling(), progress.reporting(show_progress(args)):
+        with interrupt.handling(silence_native_stderr=True), \
+                progress.reporting(show_progress(args)):
             try:
                 return int(args.func(args) or 0)
             except KeyboardInterrupt:
+                interrupt.restore_stderr()
                 what = progress.current()
                 run = getattr(args, "run_output", None)
                 done = (f"the results in {run.path} were written before" if run is not None
