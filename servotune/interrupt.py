@@ -174,7 +174,10 @@ def process_pool(workers: int) -> Iterator[object]:
                 process.terminate()
         for process in processes:
             with contextlib.suppress(Exception):
-                process.join(timeout=1.0)
+                process.join(timeout=2.0)
+                if process.is_alive():  # a loaded machine: make sure
+                    process.kill()
+                    process.join(timeout=2.0)
         raise
     else:
         pool.shutdown(wait=True)
