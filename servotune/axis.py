@@ -219,9 +219,12 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
         raise _err(file, "[structure]", f"unknown keys {sorted(unknown)}",
                    f"use only {sorted(_STRUCTURE_KEYS)}")
     zeta = table.get("modal_damping", 0.03)
-    if not isinstance(zeta, (int, float, list)) or isinstance(zeta, bool):
+    values = zeta if isinstance(zeta, list) else [zeta]
+    if (not isinstance(zeta, (int, float, list)) or isinstance(zeta, bool) or not values
+            or not all(isinstance(z, (int, float)) and not isinstance(z, bool)
+                       and math.isfinite(z) and 0 <= z < 1 for z in values)):
         raise _err(file, "[structure] modal_damping", f"got {zeta!r}",
-                   "give a damping ratio such as 0.03 or a list with one per mode")
+                   "give a damping ratio in [0, 1) such as 0.03, or a list with one per mode")
     if "file" in table:
         if "mass" in table or "stiffness" in table:
             raise _err(file, "[structure]", "both file and mass/stiffness are given",
@@ -243,6 +246,13 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
         matrices = read_structure(paths["mass"], paths.get("stiffness"), dof_map)
     except MatrixFileError as exc:
         raise _err(file, key, str(exc), "fix or re-export the matrix files") from None
+    for label, matrix, limit, unit in (("mass", matrices.mass, 1e9, "kg (or kg m^2)"),
+                                       ("stiffness", matrices.stiffness, 1e16,
+                                        "N/m (or N m/rad)")):
+        top = _largest(matrix)
+        if not top <= limit:
+            raise _err(file, key, f"the {label} matrix holds {top:.3g} {unit}, beyond the "
+                       f"plausible {limit:g}", "check the units of the export (SI: kg, N/m)")
     try:
         if "reduce" in table:
             spec = table["reduce"]
@@ -265,7 +275,21 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
         raise _err(file, "[structure]", str(exc), "fix the matrices or the settings") from None
 
 
+def _largest(matrix) -> float:
+    """Largest magnitude of a dense or sparse matrix (inf when not finite)."""
+    import numpy as np
+
+    data = matrix.data if hasattr(matrix, "tocsr") else np.asarray(matrix)
+    if data.size == 0:
+        return 0.0
+    if not np.all(np.isfinite(data)):
+        return math.inf
+    return float(np.abs(data).max())
+
+
 def _check_dofs(model: ModalModel, names, file, field):
+    if not all(isinstance(n, str) for n in names):
+        raise _err(file, field, f"got {list(names)!r}", "give DOF names as strings")
     try:
         model.index(list(names))
     except UnknownDofError as exc:
@@ -353,12 +377,17 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
                        "give a CSV of sliding friction over both velocity signs") from None
     try:
         return GuideWayFriction(tuple(pads), params,
-                                _number(table, "viscous", file, "friction", positive=False))
+                                _number(table, "viscous", file, "friction", positive=False,
+                                        low=0.0, high=1e10, unit="N s/m"))
     except ValueError as exc:
         raise _err(file, "[friction]", str(exc), "fix the values") from None
 
 
 _MOTOR_KEYS = ("torque_constant", "back_emf_constant", "resistance", "inductance")
+#: Plausible ranges (SI) that catch unit slips; far wider than any servo motor.
+_MOTOR_RANGES = {"torque_constant": (1e-5, 1e3, "N m/A"),
+                 "back_emf_constant": (1e-5, 1e3, "V s/rad"),
+                 "resistance": (1e-6, 1e4, "ohm"), "inductance": (1e-9, 100.0, "H")}
 
 
 def _drive(data, structure, file, defaults) -> Drive | None:
@@ -383,11 +412,16 @@ def _drive(data, structure, file, defaults) -> Drive | None:
     if ("kv" in position) == ("kv_m_per_min_per_mm" in position):
         raise _err(file, "[drive.position_loop]", "give exactly one of kv [1/s] and "
                    "kv_m_per_min_per_mm", "e.g. kv_m_per_min_per_mm = 1.0 (the paper's Kv)")
-    kv = (_number(position, "kv", file, "drive.position_loop") if "kv" in position else
+    kv = (_number(position, "kv", file, "drive.position_loop", low=1e-3, high=1e4, unit="1/s")
+          if "kv" in position else
           kv_from_m_per_min_per_mm(_number(position, "kv_m_per_min_per_mm", file,
-                                            "drive.position_loop")))
+                                            "drive.position_loop", low=1e-4, high=600.0,
+                                            unit="(m/min)/mm")))
     for name in ("rotor", "stator"):
         if name in motor:
+            if not isinstance(motor[name], str):
+                raise _err(file, f"[drive.motor] {name}", f"got {motor[name]!r}",
+                           'give one DOF name, e.g. "motor.rotor"')
             _check_dofs(structure, [motor[name]], file, f"[drive.motor] {name}")
     if encoder == "linear":
         _check_dofs(structure, ["encoder.x"], file, "[drive] encoder = 'linear'")
@@ -398,14 +432,23 @@ def _drive(data, structure, file, defaults) -> Drive | None:
         limits = _limits(motor, file)
         sampling = _sampling(table, file, defaults)
         return Drive(
-            motor=Motor(*(_number(motor, k, file, "drive.motor") for k in _MOTOR_KEYS),
+            motor=Motor(*(_number(motor, k, file, "drive.motor", low=_MOTOR_RANGES[k][0],
+                                  high=_MOTOR_RANGES[k][1], unit=_MOTOR_RANGES[k][2])
+                          for k in _MOTOR_KEYS),
                         rotor=motor.get("rotor", "motor.rotor"),
                         stator=motor.get("stator", "motor.stator")),
-            ratio=_number(trans, "ratio", file, "drive.transmission"),
-            current_loop=PIController(_number(current, "kp", file, "drive.current_loop"),
-                                      _number(current, "ti", file, "drive.current_loop")),
-            velocity_loop=PIController(_number(velocity, "kp", file, "drive.velocity_loop"),
-                                       _number(velocity, "ti", file, "drive.velocity_loop")),
+            ratio=_number(trans, "ratio", file, "drive.transmission", low=1e-7, high=10.0,
+                          unit="m/rad"),
+            current_loop=PIController(
+                _number(current, "kp", file, "drive.current_loop", low=1e-6, high=1e6,
+                        unit="V/A"),
+                _number(current, "ti", file, "drive.current_loop", low=1e-7, high=1e3,
+                        unit="s")),
+            velocity_loop=PIController(
+                _number(velocity, "kp", file, "drive.velocity_loop", low=1e-9, high=1e7,
+                        unit="N m s/rad"),
+                _number(velocity, "ti", file, "drive.velocity_loop", low=1e-7, high=1e3,
+                        unit="s")),
             kv=kv, feedback=encoder,
             velocity_feedforward=_number(feedforward, "velocity", file, "drive.feedforward", 0.0,
                                          positive=False),
@@ -479,9 +522,16 @@ def _cutting(data, file) -> Cutting | None:
         return None
     speeds = table.get("speed_rpm", [1000.0, 12000.0])
     if (not isinstance(speeds, list) or len(speeds) != 2 or
-            not all(isinstance(v, (int, float)) for v in speeds) or not 0 < speeds[0] < speeds[1]):
+            not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in speeds)
+            or not 0 < speeds[0] < speeds[1] <= 2e5):
         raise _err(file, "[cutting] speed_rpm", f"got {speeds!r}",
-                   "give [low, high] spindle speeds in rpm with 0 < low < high")
+                   "give [low, high] spindle speeds in rpm with 0 < low < high <= 200000")
+    teeth = table["teeth"]
+    if isinstance(teeth, bool) or not isinstance(teeth, int) or not 1 <= teeth <= 200:
+        raise _err(file, "[cutting] teeth", f"got {teeth!r}", "give a whole number from 1 to 200")
+    for key, low, high in (("kt", 1e5, 1e11), ("kn", 0.0, 1e11)):
+        _number(table, key, file, "cutting", positive=(key == "kt"), low=low, high=high,
+                unit="N/m^2")
     direction = table.get("direction", "x")
     if direction not in ("x", "y"):
         raise _err(file, "[cutting] direction", f"got {direction!r}", 'give "x" or "y"')
@@ -578,6 +628,10 @@ def _operation(data, drive, friction, cutting, requirements, file, defaults
         raise _err(file, "[operation]", str(exc), "fix the values") from None
 
 
+#: Largest upper bound of each design variable (SI), past any machine tool.
+_BOUND_MAX = {"c": 1e12, "kv": 1e4, "kp": 1e7, "ti": 1e3}
+
+
 def _tuning(data, file) -> TuningSettings:
     names = ("c", "kv", "kp", "ti")
     table = _table(data, "tuning", file, (), ("free", "chatter_weight", "friction_spread",
@@ -597,7 +651,8 @@ def _tuning(data, file) -> TuningSettings:
                     or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                for v in b) or not 0 < b[0] < b[1] < math.inf):
                 raise _err(file, f"[tuning] {key}", f"got {b!r}",
-                           "give the bounds [low, high] in SI units with 0 < low < high")
+                           "give the bounds [low, high] in SI units with 0 < low < high <= "
+                           f"{_BOUND_MAX[key]:g}")
             bounds[key] = (float(b[0]), float(b[1]))
     weight = table.get("chatter_weight", 0.0)
     if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not 0 <= weight <= 1:
@@ -618,6 +673,12 @@ def _tuning(data, file) -> TuningSettings:
                           MappingProxyType({k: float(v) for k, v in spread.items()}))
 
 
+_REQUIREMENT_RANGES = {"ms_velocity_max": (1.0, 100.0, ""), "ms_position_max": (1.0, 100.0, ""),
+                       "phase_margin_min_deg": (0.0, 90.0, "deg"),
+                       "gain_margin_min_db": (0.0, 60.0, "dB"), "kv_min": (0.0, 1e4, "1/s"),
+                       "depth_required": (1e-7, 1.0, "m")}
+
+
 def _requirements(data, file) -> Requirements:
     ratios = ("bandwidth_ratio_min", "current_bandwidth_ratio_min", "ti_bandwidth_min",
               "ti_bandwidth_max")
@@ -631,7 +692,9 @@ def _requirements(data, file) -> Requirements:
     for key in ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg",
                 "gain_margin_min_db", "kv_min", "depth_required"):
         if key in table:
-            kwargs[key] = _number(table, key, file, "requirements", positive=False)
+            low, high, unit = _REQUIREMENT_RANGES[key]
+            kwargs[key] = _number(table, key, file, "requirements", positive=False, low=low,
+                                  high=high, unit=unit)
     for key in ratios:
         if key in table:
             kwargs[key] = _number(table, key, file, "requirements", low=0.0, high=1e3,
@@ -643,14 +706,17 @@ def _requirements(data, file) -> Requirements:
                                   unit="(a fraction)")
     if "kv_min_m_per_min_per_mm" in table:
         kwargs["kv_min"] = kv_from_m_per_min_per_mm(
-            _number(table, "kv_min_m_per_min_per_mm", file, "requirements", positive=False))
+            _number(table, "kv_min_m_per_min_per_mm", file, "requirements", positive=False,
+                    low=0.0, high=600.0, unit="(m/min)/mm"))
     for key, name in (("band_hz", "band"), ("loop_band_hz", "loop_band")):
         if key in table:
             band = table[key]
             if (not isinstance(band, list) or len(band) != 2
-                    or not all(isinstance(v, (int, float)) for v in band)):
+                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                               and math.isfinite(v) for v in band)
+                    or not 0 < band[0] < band[1] <= 1e5):
                 raise _err(file, f"[requirements] {key}", f"got {band!r}",
-                           "give [low, high] in Hz")
+                           "give [low, high] in Hz with 0 < low < high <= 100000")
             kwargs[name] = (2 * math.pi * band[0], 2 * math.pi * band[1])
     try:
         return Requirements(**kwargs)
@@ -695,6 +761,10 @@ def load_axis(path) -> Axis:
     name = data["axis"].get("name")
     if not isinstance(name, str) or not name:
         raise _err(file, "[axis] name", "missing", 'add name = "my_axis"')
+    unknown = set(data["axis"]) - {"name", "description"}
+    if unknown:
+        raise _err(file, "[axis]", f"unknown keys {sorted(unknown)}",
+                   "use name and description (check the spelling)")
     folder = file.parent
     structure = _structure(data["structure"], folder, file)
     defaults: list[str] = []

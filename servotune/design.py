@@ -542,7 +542,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     if problem.thrust is not None:
         out["thrust_before"] = problem.thrust.to_dict(result.initial.c)
         out["thrust_after"] = problem.thrust.to_dict(result.design.c)
-    if axis.friction is not None:
+    if axis.friction is not None and axis.drive is not None:
         amp = freq = None
         if axis.drive is not None and axis.operation is not None:
             force = axis.operation.process_force_pp or 600.0
@@ -598,6 +598,14 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
 
             out["verdict"] = nonlinear_verdict(axis, result, executor=executor,
                                                progress=progress)
+    if axis.drive is None and result.after is not None:
+        omega = analysis.default_omega(1.0, 1000.0, 3000)
+        out["compliance_before"] = (analysis.compliance_curve(
+            axis, Contact.viscous(result.initial.c), None, omega, "before, viscous",
+            controlled=False),)
+        out["compliance_after"] = (analysis.compliance_curve(
+            axis, Contact.viscous(result.design.c), None, omega, "after, viscous",
+            controlled=False),)
     if axis.drive is None:
         from .verdict import Verdict
 

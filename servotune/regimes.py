@@ -187,7 +187,7 @@ class RegimeModel:
         """A readable name: regime, model and (when not nominal) friction sample."""
         what = {"presliding": "presliding", "describing": "describing function",
                 "sliding": "sliding", "viscous": "viscous"}[self.kind]
-        text = f"{self.regime}: {what}"
+        text = self.regime if self.regime == what else f"{self.regime}: {what}"
         if self.kind == "describing":
             text += f" at {self.amplitude:.3g} m"
         return text + ("" if self.sample == "nominal" else f" ({self.sample})")

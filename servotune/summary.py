@@ -124,7 +124,7 @@ def regimes_table(job) -> Table:
     """Regime by regime: the claim, the nonlinear axis before and after, the improvement."""
     rows = []
     verdict = job.verdict
-    if verdict is not None:
+    if verdict is not None and verdict.regimes:
         for v in verdict.regimes:
             imp = v.realised_improvement
             rows.append((v.name, _f(v.claimed_peak_before, "{:.3g}"), _f(v.claimed_peak, "{:.3g}"),
@@ -136,18 +136,35 @@ def regimes_table(job) -> Table:
         notes = tuple(f"{v.name}: {v.reason}" for v in verdict.regimes if not v.holds)
         notes += tuple(f"{v.name}: {v.explanation}" for v in verdict.regimes if v.explanation)
     else:
-        for entry in job.to_dict().get("regimes") or []:
-            rows.append((entry["name"], "", _f(entry["claimed_peak_m_per_n"], "{:.3g}"), "", "",
-                         "", "not simulated"))
-        notes = ("the nonlinear verification was skipped",)
+        for entry in _linear_claims(job):
+            rows.append((entry[0], _f(entry[1], "{:.3g}"), _f(entry[2], "{:.3g}"), "-", "-",
+                         "-", "linear" if verdict is not None else "not simulated"))
+        notes = (("the nonlinear verification was skipped",) if verdict is None else
+                 tuple(verdict.checked))
     return Table("Regimes: worst compliance peak [m/N], linear claim and nonlinear axis",
                  ("regime", "claim before", "claim after", "nonlinear before",
                   "nonlinear after", "realised", "holds"), tuple(rows), notes)
 
 
-def loops_table(job) -> Table:
+def _linear_claims(job):
+    """(regime, claim before, claim after) from the dense check of each cutting model."""
+    r = job.result
+    out = {}
+    for mp0, mp1 in zip(r.before.models, (r.after or r.before).models, strict=True):
+        if not mp1.model.cutting:
+            continue
+        b = mp0.peak_compliance if mp0.stable else math.inf
+        a = mp1.peak_compliance if mp1.stable else math.inf
+        old = out.get(mp1.model.regime, (0.0, 0.0))
+        out[mp1.model.regime] = (max(old[0], b), max(old[1], a))
+    return [(name, b, a) for name, (b, a) in out.items()]
+
+
+def loops_table(job) -> Table | None:
     """Both loops of the reference model (where the axis moves), before and after."""
     r = job.result
+    if r.problem.drive is None:
+        return None
     rows = []
     after = r.after
     ref = None if after is None else after.models[after.reference].model.name
@@ -212,7 +229,9 @@ def verdict_lines(job) -> tuple[str, tuple[str, ...]]:
     """The verdict line (label and what it means) and what was checked or not."""
     status = job.status
     r = job.result
-    if status == "verified":
+    if status == "verified" and job.verdict.nonlinear_holds is None:
+        head = "VERIFIED: " + job.verdict.checked[0]
+    elif status == "verified":
         head = ("VERIFIED: the linear checks hold in every regime model and the nonlinear axis "
                 "holds the claim in every regime")
     elif status == "linear only":
@@ -222,7 +241,7 @@ def verdict_lines(job) -> tuple[str, tuple[str, ...]]:
         reasons = list(job.verdict.reasons) if job.verdict is not None else list(r.reasons)
         head = "NOT VERIFIED: " + ("; ".join(reasons) if reasons else "see the checks")
     lines = []
-    if job.verdict is not None:
+    if job.verdict is not None and job.verdict.nonlinear_holds is not None:
         lines += [f"checked: {c}" for c in job.verdict.checked]
         lines += [f"not checked: {c}" for c in job.verdict.not_checked]
     return head, tuple(lines)

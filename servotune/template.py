@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import io
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
 from .report import check_writable, write_atomically
 
-__all__ = ["template_structure", "write_template", "TEMPLATE_TOML"]
+__all__ = ["template_structure", "write_template", "template_toml", "axis_name_for",
+           "TEMPLATE_TOML"]
 
 RATIO = 10e-3 / (2 * math.pi)  # 10 mm lead, direct drive [m/rad]
 
@@ -50,19 +52,21 @@ def template_structure() -> tuple[np.ndarray, np.ndarray, list[str]]:
     return m, k, dofs
 
 
-TEMPLATE_TOML = f'''# Axis description for servotune. Values are SI (m, N, s, kg, rad) unless the key says
+_TEMPLATE = f'''\
+# Axis description for servotune. Values are SI (m, N, s, kg, rad) unless the key says
 # otherwise (_hz, _deg, _db, _rpm, kv_m_per_min_per_mm). Check it with
 #   servotune modes THIS_FOLDER        and tune it with   servotune tune THIS_FOLDER
 
 [axis]
-name = "my_axis"                    # a short name (used for output folders)
+name = "{{AXIS_NAME}}"{{NAME_PAD}} # a short name (used for output folders)
 description = "Starter axis written by servotune init: a lumped ball-screw axis"
 
 [structure]
 file = "structure.npz"              # npz with arrays mass, stiffness (n x n) and dofs (n names)
 modal_damping = 0.03                # damping ratio of every mode (or a list, one per mode)
-# FE matrices instead of a reduced model (MatrixMarket .mtx, Harwell-Boeing .rb/.hb, .mat, .npz),
-# reduced by Craig-Bampton on loading to the boundary DOFs plus n_modes fixed-interface modes:
+# FE matrices instead of a reduced model (MatrixMarket .mtx/.mmf, Harwell-Boeing
+# .hb/.rsa/.rua/.hbmat, MATLAB .mat, .npz), reduced by Craig-Bampton on loading to the boundary
+# DOFs plus n_modes fixed-interface modes:
 #   mass = "M.mtx"
 #   stiffness = "K.mtx"
 #   dof_map = "dofs.csv"            # one DOF name per matrix row (header "name")
@@ -183,8 +187,44 @@ chatter_weight = 0.0                # 0: compliance peak only; 1: chatter limit 
 '''
 
 
-def write_template(folder, force: bool = False) -> list[Path]:
+def axis_name_for(folder) -> str:
+    """The axis name ``init`` gives a folder: its name, in letters, digits and ``_ . -``.
+
+    Examples
+    --------
+    >>> axis_name_for("projects/X axis (rev 2)")
+    'X_axis_rev_2'
+    >>> axis_name_for(".")  != ""
+    True
+    """
+    name = Path(folder).resolve().name
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
+    name = re.sub(r"_{2,}", "_", name).strip("._-")
+    return name or "my_axis"
+
+
+def template_toml(name: str = "my_axis") -> str:
+    """The commented ``axis.toml`` of the starter axis, with ``[axis] name`` = ``name``."""
+    if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
+        raise ValueError(f"axis name {name!r}: use letters, digits and _ . - only")
+    return _TEMPLATE.replace("{AXIS_NAME}", name).replace(
+        "{NAME_PAD}", " " * max(0, 26 - len(name)))
+
+
+TEMPLATE_TOML = template_toml("my_axis")  # the text with the default name
+
+
+def write_template(folder, force: bool = False, name: str = "my_axis") -> list[Path]:
     """Write the starter axis (``axis.toml`` and ``structure.npz``) into ``folder``.
+
+    Parameters
+    ----------
+    folder : path-like
+        Created if needed.
+    force : bool
+        Replace existing files.
+    name : str
+        ``[axis] name``; ``servotune init`` passes the folder's name (:func:`axis_name_for`).
 
     Raises
     ------
@@ -194,9 +234,10 @@ def write_template(folder, force: bool = False) -> list[Path]:
     folder = Path(folder)
     files = [folder / "axis.toml", folder / "structure.npz"]
     check_writable(files, force)
+    text = template_toml(name)
     m, k, dofs = template_structure()
     buffer = io.BytesIO()
     np.savez(buffer, mass=m, stiffness=k, dofs=np.array(dofs))
     write_atomically(files[1], buffer.getvalue(), force)
-    write_atomically(files[0], TEMPLATE_TOML, force)
+    write_atomically(files[0], text, force)
     return files

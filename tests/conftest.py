@@ -3,3 +3,20 @@
 import matplotlib
 
 matplotlib.use("Agg")
+
+from pathlib import Path  # noqa: E402
+
+import pytest  # noqa: E402
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+
+
+@pytest.fixture(scope="session")
+def bundled_job():
+    """The bundled axis tuned once for the whole session, with the nonlinear verdict (the
+    main job of ``make demo``): (axis, AxisTuning)."""
+    from servotune.axis import load_axis
+    from servotune.design import tune_axis
+
+    axis = load_axis(MODELS / "paper_x_axis")
+    return axis, tune_axis(axis, starts=2, simulate=True)

@@ -30,7 +30,7 @@ def test_mode_form_zero_order(tmp_path, capsys):
     assert out["b_crit_m"] * 6e8 * mu == pytest.approx(2 * k * 0.011 * 1.011, rel=1e-9)
     assert out["margin"] == pytest.approx(out["min_depth_limit_m"] / 0.2e-3)
     assert 5000 <= out["critical_speed_rpm"] <= 25000
-    assert (tmp_path / "lobes_zoa.png").stat().st_size > 10_000
+    assert (tmp_path / "lobes_modes" / "lobes_zoa.png").stat().st_size > 10_000
 
 
 def test_frf_form_matches_the_mode_form(tmp_path, capsys):
@@ -55,7 +55,7 @@ def test_semi_discretisation_form(tmp_path, capsys):
     assert out["method"] == "sdm" and out["intervals"] == 30
     # flip lobe below the zero-order limit
     assert out["b_crit_m"] < 0.7 * out["zoa_b_crit_m"]
-    assert (tmp_path / "lobes_sdm.png").stat().st_size > 10_000
+    assert (tmp_path / "lobes_modes" / "lobes_sdm.png").stat().st_size > 10_000
 
 
 def test_text_output_with_two_directions(capsys):
@@ -69,15 +69,22 @@ def test_text_output_with_two_directions(capsys):
     (["lobes", "axis_x"], "no axis description here"),
     (["lobes", "models/paper_x_axis", *MODE], "one source of the compliance"),
     (["lobes"], "give the compliance"),
-    (["lobes", *MODE, "--immersion", "1.5"], "radial_immersion"),
-    (["lobes", *MODE, "--kt=-6e8"], "kt"),
-    (["lobes", "--mode", "922", "1.5", "1e6"], "damping_ratio"),
     (["lobes", *MODE, "--speed-rpm", "9000", "5000"], "speed range"),
-    (["lobes", *MODE, "--speeds", "0"], "number of speeds"),
     (["lobes", "--frf", "missing.csv"], "missing.csv"),
 ])
 def test_bad_input_is_a_clear_error(argv, words, capsys, tmp_path):
     assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 1
+    assert words in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["lobes", *MODE, "--immersion", "1.5"], "--immersion"),
+    (["lobes", *MODE, "--kt=-6e8"], "--kt"),
+    (["lobes", "--mode", "922", "1.5", "1e6"], "ZETA"),
+    (["lobes", *MODE, "--speeds", "0"], "--speeds"),
+])
+def test_out_of_range_flags_are_usage_errors(argv, words, capsys, tmp_path):
+    assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 2
     assert words in capsys.readouterr().err
 
 
@@ -91,13 +98,16 @@ def test_measured_frf_with_semi_discretisation_is_refused(tmp_path, capsys):
     assert "state-space" in capsys.readouterr().err
 
 
-def test_existing_figure_is_not_overwritten(tmp_path, capsys):
-    target = tmp_path / "lobes_zoa.png"
+def test_a_file_of_the_user_in_the_results_folder_is_not_lost(tmp_path, capsys):
+    folder = tmp_path / "lobes_modes"
+    folder.mkdir()
+    target = folder / "notes.txt"
     target.write_bytes(b"keep me")
     assert main(["lobes", *MODE, "--out", str(tmp_path)]) == 1
-    assert "--force" in capsys.readouterr().err and target.read_bytes() == b"keep me"
-    assert main(["lobes", *MODE, "--out", str(tmp_path), "--force"]) == 0
-    assert target.read_bytes() != b"keep me"
+    assert "notes.txt" in capsys.readouterr().err and target.read_bytes() == b"keep me"
+    target.unlink()
+    assert main(["lobes", *MODE, "--out", str(tmp_path)]) == 0
+    assert (folder / "lobes_zoa.png").stat().st_size > 10_000
 
 
 def test_axis_lobes_agree_with_the_closed_loop_compliance(tmp_path, capsys):

@@ -1,12 +1,20 @@
-"""The command line, called in-process through ``main([...])``."""
+"""The command line, called in-process through ``main([...])``: results, the output policy,
+interruption, start-up and the listed small fixes."""
 
 import json
+import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from servotune import twomass
-from servotune.cli import main
+from servotune.cli import COMMANDS, SUMMARIES, build_parser, main
+from servotune.cli._common import RunOutput, print_json, to_jsonable
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
 def test_twomass_json_has_the_keys_and_values(tmp_path, capsys):
@@ -19,29 +27,365 @@ def test_twomass_json_has_the_keys_and_values(tmp_path, capsys):
     np.testing.assert_allclose(result["c_opt"], 4.912e5, rtol=1e-4)
     np.testing.assert_allclose(result["peak_compliance"], twomass.g_alpha(0.3) / 16e6)
     assert len(result["fixed_points_hz"]) == 2
-    for name in ("fig5_compliance_layout_B.png", "fig4_g_alpha.png"):
-        assert (tmp_path / name).stat().st_size > 10_000
+    folder = tmp_path / "twomass_layout_B"
+    assert result["folder"] == str(folder)
+    assert [Path(f).name for f in result["figures"]] == ["fig5_compliance.png",
+                                                         "fig4_g_alpha.png"]
+    for f in result["figures"]:
+        assert Path(f).parent == folder and Path(f).stat().st_size > 10_000
+    assert json.loads((folder / "results.json").read_text()) == result
 
 
-def test_twomass_text_and_layout_a(tmp_path, capsys):
+def test_twomass_text_and_layout_a_without_plots(tmp_path, capsys):
     assert main(["twomass", "--layout", "A", "--no-plots", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "Copt" in out and "layout A" in out
+    assert sorted(p.name for p in (tmp_path / "twomass_layout_A").iterdir()) == [
+        ".servotune-run.json", "results.json"]
+
+
+# --------------------------------------------------------------------------- output policy
+
+def test_a_run_replaces_its_own_results_and_keeps_what_it_did_not_write(tmp_path, capsys):
+    folder = tmp_path / "twomass_layout_B"
+    assert main(["twomass", "--out", str(tmp_path), "--alpha", "0.3", "--json"]) == 0
+    first = json.loads(capsys.readouterr().out)
+    assert main(["twomass", "--out", str(tmp_path), "--alpha", "0.5", "--json"]) == 0
+    second = json.loads(capsys.readouterr().out)
+    assert second["c_opt"] != first["c_opt"]
+    assert json.loads((folder / "results.json").read_text())["c_opt"] == second["c_opt"]
+    # a file the user put there: refused before any work, in CLI words, nothing changed
+    (folder / "notes.txt").write_text("mine")
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    assert main(["twomass", "--out", str(tmp_path), "--alpha", "0.7"]) == 1
+    err = capsys.readouterr().err
+    assert "notes.txt" in err and "another --out" in err and "force=" not in err
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["twomass_layout_B"]  # no leftovers
+
+
+def test_the_old_force_flag_is_accepted_but_hidden(tmp_path, capsys):
+    assert main(["twomass", "--no-plots", "--out", str(tmp_path), "--force"]) == 0
+    assert "--force" not in build_parser("twomass").format_help()
+
+
+@pytest.mark.parametrize("name", ["../../x", "/etc/x", "a/b", "..", ".hidden", "x y\tz"])
+def test_a_subject_name_never_leads_outside_out(tmp_path, name):
+    out = tmp_path / "out"
+    run = RunOutput(out, "bode", name, ["bode.png"])
+    assert run.path.parent == out and not run.path.name.startswith(".")
+    with run.writing() as folder:
+        (folder / "bode.png").write_bytes(b"x")
+    assert sorted(p for p in tmp_path.rglob("*") if p.is_file()) == sorted(
+        [run.path / "bode.png", run.path / RunOutput.MANIFEST])
+
+
+def test_an_axis_named_to_escape_writes_inside_out(tmp_path, capsys):
+    import shutil
+
+    axis = tmp_path / "axis"
+    shutil.copytree(MODELS / "two_mass_fig5", axis)
+    toml = axis / "axis.toml"
+    text = toml.read_text()
+    start = text.index("name = ")
+    end = text.index("\n", start)
+    toml.write_text(text[:start] + 'name = "../../escaped"' + text[end:])
+    out = tmp_path / "deep" / "out"
+    assert main(["modes", str(axis), "--out", str(out)]) == 0
+    written = [p for p in tmp_path.rglob("*") if p.is_file() and axis not in p.parents]
+    assert written and all(out in p.parents for p in written)
+
+
+@pytest.mark.parametrize("layout", ["file", "under_file"])
+def test_out_that_cannot_be_a_folder_is_a_clear_error(tmp_path, capsys, layout):
+    blocker = tmp_path / "results.txt"
+    blocker.write_text("a file")
+    out = blocker if layout == "file" else blocker / "sub"
+    assert main(["twomass", "--no-plots", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "results.txt is a file" in err and "Traceback" not in err
+    assert blocker.read_text() == "a file" and sorted(tmp_path.iterdir()) == [blocker]
+
+
+def test_out_without_permission_is_a_clear_error(tmp_path, capsys, monkeypatch):
+    # (as root, permissions do not stop writing: the refusal is simulated where it happens)
+    import servotune.cli._common as common
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(common.tempfile, "mkdtemp", refuse)
+    out = tmp_path / "new" / "out"
+    assert main(["twomass", "--no-plots", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "permission denied" in err.lower() and "--out" in err
+    assert not (tmp_path / "new").exists()  # the folders made for it are gone again
+
+
+def test_out_in_a_read_only_folder_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    import os
+
+    import servotune.cli._common as common
+
+    real = os.access
+    monkeypatch.setattr(common.os, "access", lambda p, mode: False if Path(p) == tmp_path
+                        else real(p, mode))
+    assert main(["twomass", "--no-plots", "--out", str(tmp_path / "out")]) == 1
+    assert "no permission to write into" in capsys.readouterr().err
+
+
+def test_ctrl_c_exits_130_with_one_line_and_keeps_the_earlier_results(tmp_path, capsys,
+                                                                      monkeypatch):
+    assert main(["twomass", "--no-plots", "--out", str(tmp_path)]) == 0
+    folder = tmp_path / "twomass_layout_B"
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    capsys.readouterr()
+    import servotune.cli._common as common
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(common, "write_results", interrupted)
+    monkeypatch.setattr("servotune.cli.twomass.write_results", interrupted)
+    assert main(["twomass", "--no-plots", "--out", str(tmp_path), "--alpha", "0.5"]) == 130
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "interrupted" in err and "nothing was written" in err
+    assert "Traceback" not in err
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["twomass_layout_B"]
+
+
+def test_ctrl_c_names_the_task_it_interrupted(tmp_path, capsys, monkeypatch):
+    from servotune import progress
+
+    def slow(*args, **kwargs):
+        with progress.task("fixed points", total=4) as t:
+            t.update(1)
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr("servotune.twomass.analyse_two_mass", slow)
+    assert main(["twomass", "--no-plots", "--out", str(tmp_path)]) == 130
+    assert "interrupted during fixed points (1/4)" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
 
 
-def test_existing_figures_are_not_overwritten(tmp_path, capsys):
-    target = tmp_path / "fig4_g_alpha.png"
-    target.write_bytes(b"keep me")
-    assert main(["twomass", "--out", str(tmp_path)]) == 1
-    assert "--force" in capsys.readouterr().err
-    assert target.read_bytes() == b"keep me"
-    assert not (tmp_path / "fig5_compliance_layout_B.png").exists()
-    assert main(["twomass", "--out", str(tmp_path), "--force"]) == 0
-    assert target.read_bytes() != b"keep me"
+def test_an_unexpected_error_is_one_line_not_a_traceback(tmp_path, capsys, monkeypatch):
+    def broken(*args, **kwargs):
+        raise AttributeError("'NoneType' object has no attribute 'x'")
+
+    monkeypatch.setattr("servotune.twomass.analyse_two_mass", broken)
+    assert main(["twomass", "--no-plots", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert "internal error" in err and err.count("\n") == 1 and not any(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("argv", [["twomass", "--alpha", "-1"], ["twomass", "--k", "0"]])
-def test_bad_input_is_a_clear_error(argv, capsys, tmp_path):
-    assert main([*argv, "--out", str(tmp_path)]) == 1
-    assert "must be a positive" in capsys.readouterr().err
+# --------------------------------------------------------------------------- JSON
+
+def test_non_finite_values_become_null_with_a_reason(capsys):
+    loop = {"phase_margin_deg": math.inf, "crossover_hz": math.nan, "ms": 1.2,
+            "gains": np.array([1.0, np.nan]), "n": np.int64(3)}
+    print_json({"velocity_loop": loop})
+    out = json.loads(capsys.readouterr().out)["velocity_loop"]
+    assert out["phase_margin_deg"] is None and out["crossover_hz"] is None
+    assert "no gain crossover" in out["phase_margin_deg_reason"]
+    assert out["phase_margin_deg_reason"].startswith("+infinity")
+    assert out["crossover_hz_reason"].startswith("not a number")
+    assert out["gains"] == [1.0, None] and "null entries" in out["gains_reason"]
+    assert out["ms"] == 1.2 and out["n"] == 3 and "ms_reason" not in out
+    assert to_jsonable(math.inf) is None
+
+
+# --------------------------------------------------------------------------- the listed fixes
+
+def test_modes_band_is_printed_in_hz(tmp_path, capsys):
+    assert main(["modes", str(MODELS / "two_mass_fig5"), "--pads", "locked", "--out",
+                 str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    result = json.loads((tmp_path / "modes_two_mass_fig5" / "results.json").read_text())
+    low, high = result["band_hz"]
+    assert f"({low:g}-{high:g} Hz)" in text
+    from servotune.axis import load_axis
+
+    band = load_axis(MODELS / "two_mass_fig5").requirements.band
+    np.testing.assert_allclose([low, high], np.array(band) / (2 * math.pi))
+
+
+def test_init_names_the_axis_after_its_folder(tmp_path, capsys):
+    from servotune.axis import load_axis
+
+    folder = tmp_path / "x axis of mill 3"
+    assert main(["init", str(folder), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["axis"] == "x_axis_of_mill_3"
+    assert load_axis(folder).name == "x_axis_of_mill_3"
+    assert main(["init", str(folder)]) == 1
+    err = capsys.readouterr().err
+    assert "--force" in err and "force=True" not in err
+    assert main(["init", str(folder), "--force"]) == 0
+
+
+def test_the_template_lists_only_structure_formats_that_load():
+    import re
+
+    from servotune.structure import io
+    from servotune.template import TEMPLATE_TOML
+
+    listed = set(re.findall(r"(\.[a-z]{2,5})\b", TEMPLATE_TOML.split("[friction]")[0]))
+    listed -= {".x", ".y", ".z", ".rotor", ".stator", ".csv"}  # DOF names, the DOF map
+    known = set(io._MTX) | set(io._HB) | {".mat", ".npz"}
+    assert listed and listed <= known, listed - known
+
+
+def test_friction_json_before_fit_prints_json(tmp_path, capsys):
+    from servotune.friction import lugre
+    from servotune.friction.lugre import BIANCHI2014
+
+    v = np.concatenate([-np.geomspace(2e-4, 0.5, 20), np.geomspace(2e-4, 0.5, 20)])
+    data = tmp_path / "curve.csv"
+    rows = "\n".join(f"{a:.17g},{b:.17g}" for a, b in
+                     zip(v, lugre.steady_state_friction(BIANCHI2014, v), strict=True))
+    data.write_text("v_m_per_s,f_n\n" + rows + "\n")
+    assert main(["friction", "--json", "fit", str(data), "--no-plots", "--out",
+                 str(tmp_path)]) == 0
+    assert json.loads(capsys.readouterr().out)["estimates"]["fc"] == pytest.approx(
+        BIANCHI2014.fc, rel=1e-3)
+
+
+# --------------------------------------------------------------------------- parser
+
+def test_the_summaries_agree_with_the_commands():
+    parser = build_parser()
+    actions = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    helps = {c.dest: c.help for c in actions._choices_actions}
+    assert set(helps) == set(COMMANDS)
+    for name, text in SUMMARIES.items():
+        assert helps[name] == text, name
+
+
+def test_parameter_set_and_interval_constants_agree_with_the_library():
+    from servotune import chatter
+    from servotune.cli import friction, lobes
+    from servotune.friction.lugre import LuGreParameters
+
+    assert friction.PARAMETER_SETS == LuGreParameters.names()
+    assert lobes.DEFAULT_INTERVALS == chatter.DEFAULT_INTERVALS
+
+
+def test_help_and_argument_errors_load_no_numerics():
+    # what keeps `servotune --help` fast: none of the heavy libraries is imported
+    code = ("import sys\nfrom servotune.cli import main\n"
+            "codes = [main(['--help']), main(['modes', 'x', '--count', '-3']),"
+            " main(['lobes', '--speeds', '0'])]\n"
+            "heavy = sorted(m for m in ('numpy', 'scipy', 'control', 'casadi', 'numba',"
+            " 'matplotlib') if m in sys.modules)\n"
+            "print(codes, heavy, file=sys.stderr)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert run.stderr.strip().splitlines()[-1] == "[0, 2, 2] []"
+
+
+def test_import_servotune_is_lazy_but_complete():
+    code = ("import sys, servotune as st\n"
+            "assert 'control' not in sys.modules and 'numpy' not in sys.modules\n"
+            "missing = [n for n in st.__all__ if getattr(st, n, None) is None]\n"
+            "print(missing, st.load_axis.__module__, st.analysis.__name__)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert run.stdout.split() == ["[]", "servotune.axis", "servotune.analysis"]
+
+
+def _subparser(command):
+    parser = build_parser(command)
+    actions = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    return actions.choices[command]
+
+
+def _option(parser, flag):
+    return next((a for a in parser._actions if flag in a.option_strings), None)
+
+
+def _flag_table():
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    section = text.split("## Command-line flags", 1)[1].split("\n## ", 1)[0]
+    rows = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 4 and cells[0].startswith("`--"):
+            flag = cells[0].strip("`").split()[0]
+            rows[flag] = [c.strip() for c in cells[3].split(",")]
+    return rows
+
+
+def test_the_readme_flag_table_matches_the_commands():
+    rows = _flag_table()
+    assert set(rows) == {"--json", "--quiet", "--out", "--no-plots", "--workers", "--duration",
+                         "--force", "--continuous"}
+    for flag, commands in rows.items():
+        if commands == ["all"]:
+            commands = list(COMMANDS)
+        for command in commands:
+            words = command.split()
+            parser = _subparser(words[0])
+            if len(words) == 2:
+                actions = next(a for a in parser._actions
+                               if a.__class__.__name__ == "_SubParsersAction")
+                parser = actions.choices[words[1]]
+            assert _option(parser, flag) is not None, (flag, command)
+            assert "==SUPPRESS==" not in str(_option(parser, flag).help), (flag, command)
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_one_default_per_notion(command):
+    parser = _subparser(command)
+    defaults = {"--out": Path("out"), "--workers": None, "--duration": 20.0,
+                "--json": False, "--quiet": False, "--no-plots": False}
+    for flag in ("--json", "--quiet"):
+        assert _option(parser, flag).default is False, flag
+    if command != "init":
+        assert _option(parser, "--out") is not None, "--out"
+    for flag, default in defaults.items():
+        action = _option(parser, flag)
+        if action is not None:
+            assert action.default == default, (flag, action.default)
+    for old in ("--sweep-duration",):
+        action = _option(parser, old)
+        assert action is None or action.help == "==SUPPRESS==", old
+
+
+def test_helpers_for_the_tune_and_verify_rework():
+    import argparse
+
+    from servotune.cli._common import (
+        STARTS,
+        add_common_options,
+        add_duration_option,
+        add_workers_option,
+        default_workers,
+    )
+
+    parser = argparse.ArgumentParser(prog="servotune tune")
+    parser.add_argument("--starts", type=STARTS, default=4)
+    add_duration_option(parser, aliases=("--sweep-duration",))
+    add_workers_option(parser)
+    add_common_options(parser, plots=True)
+    args = parser.parse_args(["--sweep-duration", "4", "--starts", "2"])
+    assert args.duration == 4.0 and args.starts == 2 and args.workers is None
+    assert args.out == Path("out") and not args.no_plots
+    assert "--sweep-duration" not in parser.format_help()
+    for bad in (["--starts", "0"], ["--starts", "-5"], ["--starts", "1000000"],
+                ["--sweep-duration", "0"], ["--workers", "0"]):
+        with pytest.raises(SystemExit):
+            parser.parse_args(bad)
+    assert default_workers() >= 1
+
+
+@pytest.mark.parametrize("quiet, as_json, tty, shown", [
+    (False, False, True, True), (True, False, True, False), (False, True, True, False),
+    (False, False, False, False)])
+def test_progress_only_on_a_terminal_without_quiet_or_json(quiet, as_json, tty, shown,
+                                                           monkeypatch):
+    import argparse
+
+    from servotune.cli._common import show_progress
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: tty, raising=False)
+    assert show_progress(argparse.Namespace(quiet=quiet, json=as_json)) is shown

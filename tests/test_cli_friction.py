@@ -24,9 +24,11 @@ def test_friction_json_has_the_equivalent_damping(tmp_path, capsys):
     assert result["ceq_lugre"] > result["ceq_stiction"] > 0.0
     assert 0.0 < result["keq_lugre"] < s0
     assert [row["amplitude"] for row in result["table"]] == [1e-6, 2e-6, 5e-6]
-    for name in ("friction_stribeck.png", "friction_hysteresis.png",
-                 "friction_equivalent_damping.png"):
-        assert (tmp_path / name).stat().st_size > 10_000
+    folder = tmp_path / "friction_bianchi2014"
+    assert result["folder"] == str(folder)
+    for name in ("stribeck.png", "hysteresis.png", "equivalent_damping.png"):
+        assert (folder / name).stat().st_size > 10_000
+    assert json.loads((folder / "results.json").read_text()) == result
 
 
 def test_friction_text_output(tmp_path, capsys):
@@ -34,7 +36,7 @@ def test_friction_text_output(tmp_path, capsys):
                  str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "canudas1995" in out and "Ceq" in out
-    assert not any(tmp_path.iterdir())
+    assert not list((tmp_path / "friction_canudas1995").glob("*.png"))
 
 
 def test_friction_with_micro_damping(tmp_path, capsys):
@@ -55,11 +57,12 @@ def test_friction_with_micro_damping(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["friction", "--amplitude=-1e-6"], "--amplitude"),
     (["friction", "--frequency-hz", "0"], "--frequency-hz"),
-    (["friction", "--sigma1-decay-speed", "0"], "sigma1_decay_speed"),
+    (["friction", "--sigma1-decay-speed", "0"], "--sigma1-decay-speed"),
 ])
 def test_friction_bad_input(argv, message, tmp_path, capsys):
-    assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 1
+    assert main([*argv, "--no-plots", "--out", str(tmp_path)]) == 2
     assert message in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
 
 
 def write_csv(path, header, columns):
@@ -80,7 +83,7 @@ def test_fit_steady_state_from_csv(tmp_path, capsys):
     assert result["fixed"] == {"delta": 1.0}
     for name, value in result["estimates"].items():
         assert abs(value - getattr(BIANCHI2014, name)) < 4 * result["standard_errors"][name]
-    assert (tmp_path / "fit_stribeck.png").stat().st_size > 10_000
+    assert (tmp_path / "friction_fit_stribeck" / "fit_stribeck.png").stat().st_size > 10_000
 
 
 def test_fit_presliding_from_csv(tmp_path, capsys):
@@ -97,18 +100,23 @@ def test_fit_presliding_from_csv(tmp_path, capsys):
     result = json.loads(capsys.readouterr().out)
     s0, se = result["estimates"]["sigma0"], result["standard_errors"]["sigma0"]
     assert abs(s0 - BIANCHI2014.sigma0) < 4 * se
-    assert (tmp_path / "fit_presliding.png").exists()
+    assert (tmp_path / "friction_fit_presliding" / "fit_presliding.png").exists()
+    # --json given before the sub-subcommand counts too
+    assert main(["friction", "--json", "fit", str(data), "--no-plots", "--out",
+                 str(tmp_path)]) == 0
+    assert json.loads(capsys.readouterr().out)["estimates"]["sigma0"] == s0
 
 
 def test_fit_refuses_unreadable_and_ill_posed_data(tmp_path, capsys):
     bad = tmp_path / "bad.csv"
     bad.write_text("speed,torque\n1,2\n")
-    assert main(["friction", "fit", str(bad), "--no-plots"]) == 1
+    assert main(["friction", "fit", str(bad), "--no-plots", "--out", str(tmp_path)]) == 1
     assert "v_m_per_s,f_n" in capsys.readouterr().err
     one_sided = tmp_path / "one_sided.csv"
     v = np.geomspace(1e-4, 0.5, 30)
     write_csv(one_sided, "v_m_per_s,f_n", [v, lugre.steady_state_friction(BIANCHI2014, v)])
-    assert main(["friction", "fit", str(one_sided), "--no-plots"]) == 1
+    assert main(["friction", "fit", str(one_sided), "--no-plots", "--out", str(tmp_path)]) == 1
     assert "one sign" in capsys.readouterr().err
-    assert main(["friction", "fit", str(one_sided), "--fix", "delta", "--no-plots"]) == 1
+    assert main(["friction", "fit", str(one_sided), "--fix", "delta", "--no-plots", "--out",
+                 str(tmp_path)]) == 1
     assert "NAME=VALUE" in capsys.readouterr().err

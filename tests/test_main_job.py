@@ -37,7 +37,8 @@ def test_whole_path_on_a_small_axis(starter, tmp_path, capsys):
                  "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["verified"] is True and result["status"] == "verified"
-    saved = json.loads((out / "results.json").read_text())
+    folder = out / f"tune_{result['axis_name']}"
+    saved = json.loads((folder / "results.json").read_text())
     assert saved["design"] == result["design"]
     # the claim of every regime is the worst of its models in the dense check, and the
     # nonlinear axis holds it within the tolerance
@@ -54,7 +55,7 @@ def test_whole_path_on_a_small_axis(starter, tmp_path, capsys):
     # the thrust budget holds, and the hierarchy of the loops
     assert all(case["fits"] for case in result["thrust"]["cases"])
     assert all(c["holds"] for c in result["checks"])
-    page = (out / "report.html").read_text()
+    page = (folder / "report.html").read_text()
     assert page.count("data:image/png;base64,") >= 5  # self-contained
     assert "Regimes" in page and "Thrust" in page and "Nonlinear verification" in page
 
@@ -86,7 +87,7 @@ BAD = [
     (lambda t: t.replace("torque_constant = 1.2", "torque_constant = -1.2"),
      r"\[drive.motor\] torque_constant"),
     (lambda t: t.replace("resistance = 0.4", 'resistance = "0.4 ohm"'),
-     r"\[drive.motor\] resistance.*number in SI"),
+     r"\[drive.motor\] resistance.*number in ohm"),
     (lambda t: t.replace("kp = 3.7 ", "kp_nm = 3.7 "),
      r"\[velocity_loop\]: unknown keys \['kp_nm'\]"),
     (lambda t: t.replace("kv_m_per_min_per_mm = 1.0           # the",

@@ -73,20 +73,11 @@ def test_exact_and_pade_delays_agree_in_the_port_model_where_the_pade_holds():
 
 
 # ---------------------------------------------------------------------- thrust budget, C
-@pytest.fixture(scope="module")
-def bundled():
-    """The bundled axis tuned once (linear checks only)."""
-    from servotune.design import tune_axis
-
-    axis = load_axis(MODELS / "paper_x_axis")
-    return axis, tune_axis(axis, starts=2)
-
-
-def test_the_tuned_bundled_axis_fits_its_motor_by_hand(bundled):
+def test_the_tuned_bundled_axis_fits_its_motor_by_hand(bundled_job):
     # calibration.json / README: 14,300 kg referred to the slide (0.0362 kg m^2 at the motor
     # over r^2); friction at rapid: Fc (the Stribeck term has decayed: exp(-50) at 0.5 m/s);
     # the design's C at the rapid speed; 1 m/s^2; 20 % of 90 N m / r kept in reserve
-    axis, job = bundled
+    axis, job = bundled_job
     r = axis.drive.ratio
     mass = 0.0362 / r**2
     v_rapid = 3000 * 2 * math.pi / 60 * r
@@ -102,10 +93,10 @@ def test_the_tuned_bundled_axis_fits_its_motor_by_hand(bundled):
     assert job.thrust_after["fits"] is True
 
 
-def test_the_tuned_bundled_axis_keeps_the_loop_hierarchy_by_hand(bundled):
+def test_the_tuned_bundled_axis_keeps_the_loop_hierarchy_by_hand(bundled_job):
     # closed-loop bandwidths of both loops of the feeding model, from python-control's
     # frequency response of the state space (with the Pade delays) on a dense grid
-    axis, job = bundled
+    axis, job = bundled_job
     d, problem = job.design, job.result.problem
     drive = problem.drive_for(d)
     assert drive.sampling is not None and not drive.sampling.is_continuous

@@ -140,7 +140,7 @@ def test_table3_command_json_rows(small_axis_command, capsys):
 
 
 def test_table3_text_and_bad_workers(small_axis_command, capsys):
-    assert main(["table3", "small", "--workers", "0"]) == 1
+    assert main(["table3", "small", "--workers", "0"]) == 2  # a usage error
     assert "--workers" in capsys.readouterr().err
 
 

@@ -3,51 +3,158 @@
 Each subcommand lives in its own module of this package and exposes ``add_parser(subparsers)``
 (which registers it and sets ``func``) and a ``run(args) -> int``. With ``--json`` a subcommand
 prints exactly one JSON object of its results on standard output.
+
+:func:`main` loads only the module of the subcommand given (``servotune --help`` lists the
+others from :data:`SUMMARIES`), so that help and argument errors come back at once; it runs the
+subcommand with progress bars on standard error when wanted (:mod:`servotune.progress`) and with
+Ctrl-C turned into exit status 130 and one line saying what was interrupted
+(:mod:`servotune.interrupt`). Errors of the user's input end in one line ``servotune CMD: error:
+...`` and exit status 1; argument errors in argparse's usage message and exit status 2.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "COMMANDS", "SUMMARIES"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
 COMMANDS = ("init", "twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "tune",
             "table3", "verify")
 
+# one line per subcommand for ``servotune --help`` without importing every module (a command
+# missing here is imported to list it); tests/test_cli.py checks them against the modules
+SUMMARIES = {
+    "init": "write a commented starter axis description (axis.toml + structure.npz)",
+    "twomass": "fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
+    "modes": "natural frequencies and each mode's share of work-piece X motion",
+    "check": "check mass/stiffness matrices (symmetry, definiteness, rigid-body mass, "
+             "fixed-base frequencies, modal effective mass)",
+    "friction": "LuGre friction: equivalent damping (Eq 8-10), figures, fits",
+    "bode": "loop transfer functions of the velocity and position loops, with margins",
+    "compliance": "work-piece X compliance with a guide-way contact model (Fig 9)",
+    "lobes": "chatter stability lobes, b_crit and the chatter margin (sec 2)",
+    "tune": "tune guide-way damping C, Kv and the velocity PI (casadi), verify",
+    "table3": "simulate the paper's Table 3 (sine sweeps with LuGre friction)",
+    "verify": "does the nonlinear axis (LuGre) do what a tuned design claims?",
+}
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every subcommand registered."""
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it
+
+
+def _module(name: str):
+    return importlib.import_module(f"{__name__}.{name}")
+
+
+def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
+    """The argument parser.
+
+    Parameters
+    ----------
+    command : str or None
+        ``"*"`` (default) registers every subcommand in full; a subcommand name registers that
+        one in full and lists the others by name and summary only (fast); None lists all.
+    """
     from .. import __version__
 
     parser = argparse.ArgumentParser(
         prog="servotune",
         description="Design machine-tool feed axes where servo drive, guide-way friction and "
-                    "structure interact (Bianchi et al., Procedia CIRP 21, 2014).")
+                    "structure interact (Bianchi et al., Procedia CIRP 21, 2014).",
+        epilog="Every command takes --json (one JSON object on standard output) and --quiet; "
+               "commands that write results put them in --out DIR/<command>_<subject> "
+               "(default out/). 'servotune COMMAND --help' for its flags.")
     parser.add_argument("--version", action="version", version=f"servotune {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
-        importlib.import_module(f"{__name__}.{name}").add_parser(subparsers)
+        if command == "*" or name == command or name not in SUMMARIES:
+            _module(name).add_parser(subparsers)
+        else:
+            subparsers.add_parser(name, help=SUMMARIES[name], add_help=False)
     return parser
 
 
+def _chosen(argv: list[str]) -> str | None:
+    """The subcommand named on the command line (the first word that is not an option)."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def _label(args) -> str:
+    words = ["servotune", args.command]
+    sub = getattr(args, "friction_command", None)
+    if sub:
+        words.append(sub)
+    return " ".join(words)
+
+
+def _text(exc: Exception) -> str:
+    """The message of an error; a KeyError's own repr quotes are dropped."""
+    if isinstance(exc, KeyError) and len(exc.args) == 1 and isinstance(exc.args[0], str):
+        return exc.args[0]
+    return str(exc)
+
+
+def _os_message(exc: OSError) -> str:
+    if exc.filename is not None and exc.strerror:
+        return f"{exc.filename}: {exc.strerror.lower()}"
+    return str(exc)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``servotune`` command; returns the process exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
+    """Run the ``servotune`` command; returns the process exit status (0 done, 1 an error of
+    the input or a design that failed its checks, 2 a usage error, 130 interrupted)."""
+    from .. import interrupt, progress
+    from ._common import CliError, show_progress
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(_chosen(argv))
     try:
-        return int(args.func(args) or 0)
-    except (ValueError, FileExistsError, FileNotFoundError, RuntimeError) as exc:
-        print(f"servotune {args.command}: error: {exc}", file=sys.stderr)
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or a usage error (already printed)
+        return exc.code if isinstance(exc.code, int) else 2
+    if not getattr(args, "func", None):
+        parser.print_usage(sys.stderr)
+        print("servotune: error: give a COMMAND ('servotune --help' lists them)",
+              file=sys.stderr)
+        return 2
+    label = _label(args)
+    try:
+        with interrupt.handling(silence_native_stderr=True), \
+                progress.reporting(show_progress(args)):
+            try:
+                return int(args.func(args) or 0)
+            except KeyboardInterrupt:
+                interrupt.restore_stderr()
+                what = progress.current()
+                run = getattr(args, "run_output", None)
+                done = (f"the results in {run.path} were written before" if run is not None
+                        and run.committed else "nothing was written")
+                print(f"{label}: interrupted" + (f" during {what}" if what else "")
+                      + f"; {done}", file=sys.stderr)
+                return EXIT_INTERRUPTED
+    except (CliError, ValueError, RuntimeError, LookupError) as exc:
+        print(f"{label}: error: {_text(exc)}", file=sys.stderr)
         return 1
-    except BrokenPipeError:  # output piped into e.g. head: stop quietly
-        sys.stderr.close()
-        return 0
+    except OSError as exc:
+        if isinstance(exc, BrokenPipeError):  # output piped into e.g. head: stop quietly
+            sys.stderr.close()
+            return 0
+        print(f"{label}: error: {_os_message(exc)}", file=sys.stderr)
+        return 1
+    except Exception as exc:
+        if os.environ.get("SERVOTUNE_TRACEBACK"):
+            raise
+        print(f"{label}: internal error ({type(exc).__name__}: {exc}); please report it with "
+              "the command line (SERVOTUNE_TRACEBACK=1 shows the traceback)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from .. import analysis, report
-from ..axis import load_axis
 from ._common import (
+    RunOutput,
+    add_common_options,
     add_contact_options,
-    add_output_options,
     axis_from_args,
     contact_from_args,
     print_json,
+    require_section,
+    save_figure,
+    write_results,
 )
 
 __all__ = ["add_parser", "run"]
@@ -24,20 +26,31 @@ def add_parser(subparsers) -> None:
                     "Ms and closed-loop bandwidth of each.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
     add_contact_options(p, default="viscous")
-    add_output_options(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    axis = axis_from_args(load_axis(args.axis), args)
+    from .. import progress
+
+    with progress.task(f"loading {args.axis}"):
+        from .. import analysis
+        from ..axis import load_axis
+
+        axis = axis_from_args(load_axis(args.axis), args)
+    require_section(axis, "drive", "[drive]", "servotune bode (it analyses the servo loops)")
     contact = contact_from_args(axis, args)
-    figure = args.out / f"bode_{axis.name}.png"
-    report.check_writable([figure], args.force)
-    result = analysis.loop_report(axis, contact)
-    report.save_figure(result.plot(f"{axis.name}: loops with {contact.note}"), figure, args.force)
+    names = [] if args.no_plots else ["bode.png"]
+    run = RunOutput.for_args(args, "bode", axis.name, ["results.json", *names])
+    with progress.task(f"{axis.name}: loop analysis"):
+        result = analysis.loop_report(axis, contact)
     out = {"axis": axis.name, "kv": axis.drive.kv,
            "kv_m_per_min_per_mm": axis.drive.kv_m_per_min_per_mm, **result.to_dict(),
-           "figures": [str(figure)]}
+           "folder": str(run.path), "figures": [str(run.file(n)) for n in names]}
+    with progress.task(f"writing {run.path}"), run.writing() as folder:
+        if names:
+            save_figure(result.plot(f"{axis.name}: loops with {contact.note}"), folder / names[0])
+        write_results(folder, out)
     if args.json:
         print_json(out)
         return 0
@@ -50,5 +63,5 @@ def run(args) -> int:
         gm = "inf" if a["gain_margin_db"] is None else f"{a['gain_margin_db']:.1f}"
         print(f"  {name:10} {a['phase_margin_deg']:9.1f} {gm:>8} {a['ms']:6.2f} "
               f"{a['crossover_hz']:15.2f} {a['bandwidth_hz']:15.2f}")
-    print(f"  wrote {figure}")
+    print(f"  wrote {run.path}")
     return 0

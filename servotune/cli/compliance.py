@@ -2,20 +2,22 @@
 
 from __future__ import annotations
 
-from .. import analysis, report
-from ..axis import load_axis
-from ..plant import Contact
 from ._common import (
+    RunOutput,
+    add_common_options,
     add_contact_options,
-    add_output_options,
     axis_from_args,
     contact_from_args,
+    default_notes,
     print_json,
+    save_figure,
+    write_results,
 )
 
 __all__ = ["add_parser", "run"]
 
 FIG9_C = (5e3, 5e4, 5e5, 5e6, 5e7)  # the paper's Fig 9 [N s/m]
+HZ = 1.0 / (2.0 * 3.141592653589793)
 
 
 def add_parser(subparsers) -> None:
@@ -24,61 +26,80 @@ def add_parser(subparsers) -> None:
         description="Closed-loop work-piece X compliance x/F with the chosen guide-way model, "
                     "beside locked and free pads; and the paper's Fig 9: the compliance with "
                     "viscous guide-way damping C = 5e3 ... 5e7 N s/m and no motion control. "
-                    "The peak is taken over [requirements] band_hz.")
+                    "The peak is taken over [requirements] band_hz. Without [drive] the "
+                    "compliance is that of the structure without motion control; without "
+                    "[friction] there is no Fig 9.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
     add_contact_options(p, default="viscous")
-    add_output_options(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    axis = axis_from_args(load_axis(args.axis), args)
-    contact = contact_from_args(axis, args)
-    figures = [args.out / f"compliance_{axis.name}.png"]
-    fig9 = axis.friction is not None
-    if fig9:
-        figures.append(args.out / f"compliance_fig9_{axis.name}.png")
-    report.check_writable(figures, args.force)
-    controlled = axis.drive is not None
-    curves = []
-    for c in [contact] + [x for x in (Contact.locked(), Contact.free())
-                          if x.kind != contact.kind and axis.friction is not None]:
-        if controlled or c.kind != "free":  # uncontrolled free pads: no static stiffness
-            curves.append(analysis.compliance_curve(axis, c))
-    from ..plots import plot_compliance
+    from .. import progress
 
+    with progress.task(f"loading {args.axis}"):
+        from .. import analysis
+        from ..axis import load_axis
+        from ..plant import Contact
+
+        axis = axis_from_args(load_axis(args.axis), args)
+    contact = contact_from_args(axis, args)
+    controlled = axis.drive is not None
+    fig9 = axis.friction is not None
+    notes = default_notes(axis)
+    if not controlled:
+        notes.append("no [drive] section: the compliance of the structure without motion "
+                     "control")
+    if not fig9:
+        notes.append("no [friction] section: no Fig 9 (it varies the guide-way damping)")
+    names = [] if args.no_plots else ["compliance.png"] + (["compliance_fig9.png"] if fig9
+                                                           else [])
+    run = RunOutput.for_args(args, "compliance", axis.name, ["results.json", *names])
+    curves, fig9_curves = [], []
+    with progress.task(f"{axis.name}: compliance curves"):
+        for c in [contact] + [x for x in (Contact.locked(), Contact.free())
+                              if x.kind != contact.kind and axis.friction is not None]:
+            if controlled or c.kind != "free":  # uncontrolled free pads: no static stiffness
+                curves.append(analysis.compliance_curve(axis, c))
+        if fig9:
+            fig9_curves = analysis.uncontrolled_compliance(axis, FIG9_C)
     main = curves[0]
-    fig = plot_compliance([(c.label, c.omega, c.values) for c in curves],
-                          title=f"{axis.name}: work-piece X compliance"
-                                + (" (closed loop)" if controlled else " (no control)"),
-                          marks=[(f"{main.peak_compliance:.3g} m/N at "
-                                  f"{main.peak_frequency * analysis.HZ:.1f} Hz",
-                                  main.peak_frequency, main.peak_compliance)])
-    report.save_figure(fig, figures[0], args.force)
-    fig9_curves = []
-    if fig9:
-        fig9_curves = analysis.uncontrolled_compliance(axis, FIG9_C)
-        report.save_figure(plot_compliance(
-            [(c.label, c.omega, c.values) for c in fig9_curves],
-            title=f"{axis.name}: compliance with viscous guide-way damping, no motion control "
-                  "(Fig 9)"), figures[1], args.force)
     out = {"axis": axis.name, "contact": contact.kind, "contact_note": contact.note,
-           "controlled": controlled,
+           "controlled": controlled, "notes": notes,
            "peak_compliance": main.peak_compliance,
-           "peak_frequency_hz": main.peak_frequency * analysis.HZ,
+           "peak_frequency_hz": main.peak_frequency * HZ,
            "curves": [c.to_dict() for c in curves],
            "fig9": [dict(c.to_dict(), c=cv) for c, cv in zip(fig9_curves, FIG9_C, strict=False)],
-           "figures": [str(f) for f in figures]}
+           "folder": str(run.path), "figures": [str(run.file(n)) for n in names]}
+    with progress.task(f"writing {run.path}"), run.writing() as folder:
+        if names:
+            from ..plots import plot_compliance
+
+            save_figure(plot_compliance(
+                [(c.label, c.omega, c.values) for c in curves],
+                title=f"{axis.name}: work-piece X compliance"
+                      + (" (closed loop)" if controlled else " (no control)"),
+                marks=[(f"{main.peak_compliance:.3g} m/N at "
+                        f"{main.peak_frequency * HZ:.1f} Hz",
+                        main.peak_frequency, main.peak_compliance)]), folder / names[0])
+        if names and fig9:
+            save_figure(plot_compliance(
+                [(c.label, c.omega, c.values) for c in fig9_curves],
+                title=f"{axis.name}: compliance with viscous guide-way damping, no motion "
+                      "control (Fig 9)"), folder / names[1])
+        write_results(folder, out)
     if args.json:
         print_json(out)
         return 0
     print(f"{axis.name}: work-piece X compliance" + (" (closed loop)" if controlled else ""))
+    for note in notes:
+        print(f"  note: {note}")
     for c in curves:
         print(f"  {c.label:55} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * analysis.HZ:.2f} Hz")
+              f"{c.peak_frequency * HZ:.2f} Hz")
     for c in fig9_curves:
         print(f"  no control, {c.label:43} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * analysis.HZ:.2f} Hz")
-    for f in figures:
-        print(f"  wrote {f}")
+              f"{c.peak_frequency * HZ:.2f} Hz")
+    print(f"  wrote {run.path}")
     return 0

@@ -8,17 +8,30 @@ DATA.csv`` identifies LuGre parameters from measurements.
 
 from __future__ import annotations
 
-import dataclasses
+import argparse
 import math
+from pathlib import Path
 
-from .. import plots, report
-from ..friction import equivalent, identify, lugre
-from ._common import add_output_options, print_json
+from ._common import (
+    RunOutput,
+    add_common_options,
+    number,
+    print_json,
+    save_figure,
+    write_results,
+)
 
-__all__ = ["add_parser", "run", "run_fit"]
+__all__ = ["add_parser", "run", "run_fit", "PARAMETER_SETS"]
 
 HZ = 1.0 / (2.0 * math.pi)
 TABLE_AMPLITUDES = (1e-6, 2e-6, 5e-6)  # the amplitudes the paper's discussion is about [m]
+# LuGreParameters.names(), listed here so that the parser needs no numerics (tests check it)
+PARAMETER_SETS = ("bianchi2014", "canudas1995")
+FIGURES = ("stribeck.png", "hysteresis.png", "equivalent_damping.png")
+
+_AMPLITUDE = number(0.0, 0.1, low_open=True, example="2e-6", unit="m")
+_FREQUENCY = number(0.0, 1e5, low_open=True, example=20, unit="Hz")
+_DECAY_SPEED = number(0.0, 10.0, low_open=True, example="1e-3", unit="m/s")
 
 
 def add_parser(subparsers) -> None:
@@ -29,18 +42,17 @@ def add_parser(subparsers) -> None:
                     "area corrected) and the LuGre describing function; writes the Stribeck "
                     "curve (Fig 7), hysteresis loops (Fig 2/6) and Ceq against amplitude. "
                     "'servotune friction fit DATA.csv' identifies parameters from measurements.")
-    names = lugre.LuGreParameters.names()
+    names = PARAMETER_SETS
     p.add_argument("--params", choices=names, default="bianchi2014",
                    help="named LuGre parameter set (default: the paper's, bianchi2014)")
-    p.add_argument("--amplitude", type=float, default=2e-6,
+    p.add_argument("--amplitude", type=_AMPLITUDE, default=2e-6,
                    help="displacement amplitude A [m] (default 2e-6)")
-    p.add_argument("--frequency-hz", type=float, default=20.0,
+    p.add_argument("--frequency-hz", type=_FREQUENCY, default=20.0,
                    help="vibration frequency [Hz] (default 20)")
-    p.add_argument("--sigma1-decay-speed", type=float, default=None, metavar="V_D",
+    p.add_argument("--sigma1-decay-speed", type=_DECAY_SPEED, default=None, metavar="V_D",
                    help="velocity-dependent micro-damping sigma1 exp(-(v/V_D)^2), V_D [m/s] "
                         "(default: the constant sigma1 of the set)")
-    p.add_argument("--no-plots", action="store_true", help="do not write figures")
-    add_output_options(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
     sub = p.add_subparsers(dest="friction_command", metavar="fit")
@@ -51,29 +63,30 @@ def add_parser(subparsers) -> None:
                     "t_s,x_m,f_n (the sliding parameters then come from --params). One header "
                     "row; SI units (v_mm_per_s, x_mm, x_um and f_kn are also accepted).")
     f.add_argument("data", help="CSV file with a header row")
-    f.add_argument("--params", choices=names, default="bianchi2014",
-                   help="parameter set supplying what the data do not determine")
+    f.add_argument("--params", choices=names, default=argparse.SUPPRESS,
+                   help="parameter set supplying what the data do not determine (default "
+                        "bianchi2014)")
     f.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a steady-state parameter (fc, fs, vs, delta, sigma2) at VALUE "
                         "(SI); repeatable, e.g. --fix delta=1")
-    f.add_argument("--no-plots", action="store_true", help="do not write figures")
-    add_output_options(f)
+    add_common_options(f, plots=True, nested=True)
     f.set_defaults(func=run_fit)
 
 
 def run(args) -> int:
+    import dataclasses
+
+    from .. import progress
+
+    with progress.task("loading the friction models"):
+        from ..friction import equivalent, lugre
+
     params = lugre.LuGreParameters.named(args.params)
     if args.sigma1_decay_speed is not None:
         params = dataclasses.replace(params, sigma1_decay_speed=args.sigma1_decay_speed)
-    if not math.isfinite(args.frequency_hz) or args.frequency_hz <= 0.0:
-        raise ValueError(f"--frequency-hz must be a positive number, got {args.frequency_hz}")
-    if not math.isfinite(args.amplitude) or args.amplitude <= 0.0:
-        raise ValueError(f"--amplitude must be a positive number of metres, got {args.amplitude}")
     omega = 2.0 * math.pi * args.frequency_hz
-    files = [] if args.no_plots else [args.out / "friction_stribeck.png",
-                                      args.out / "friction_hysteresis.png",
-                                      args.out / "friction_equivalent_damping.png"]
-    report.check_writable(files, args.force)
+    names = [] if args.no_plots else list(FIGURES)
+    run_out = RunOutput.for_args(args, "friction", args.params, ["results.json", *names])
     ceq_s, keq_s = equivalent.stiction_describing_function(params.fs, params.sigma0,
                                                            args.amplitude, omega)
     ceq_l, keq_l = equivalent.describing_function(params, args.amplitude, omega)
@@ -81,12 +94,6 @@ def run(args) -> int:
     table_s = equivalent.equivalent_damping_stiction(params.fs, params.sigma0,
                                                      TABLE_AMPLITUDES, omega)
     table_c, table_k = equivalent.describing_function(params, TABLE_AMPLITUDES, omega)
-    if files:
-        a0 = params.presliding_displacement
-        loops = lugre.lugre_cycle(params, [0.5 * a0, a0, 2.0 * a0, 5.0 * a0], omega)
-        report.save_figure(plots.plot_stribeck(params), files[0], args.force)
-        report.save_figure(plots.plot_hysteresis(loops, params), files[1], args.force)
-        report.save_figure(plots.plot_equivalent_damping(params, omega), files[2], args.force)
     result = {
         "parameter_set": args.params,
         "parameters": params.to_dict(),
@@ -104,8 +111,19 @@ def run(args) -> int:
                    "keq_lugre": float(kl)}
                   for a, cs, cl, kl in zip(TABLE_AMPLITUDES, table_s, table_c, table_k,
                                            strict=True)],
-        "figures": [str(f) for f in files],
+        "folder": str(run_out.path),
+        "figures": [str(run_out.file(n)) for n in names],
     }
+    with progress.task(f"writing {run_out.path}"), run_out.writing() as folder:
+        if names:
+            from .. import plots
+
+            a0 = params.presliding_displacement
+            loops = lugre.lugre_cycle(params, [0.5 * a0, a0, 2.0 * a0, 5.0 * a0], omega)
+            save_figure(plots.plot_stribeck(params), folder / names[0])
+            save_figure(plots.plot_hysteresis(loops, params), folder / names[1])
+            save_figure(plots.plot_equivalent_damping(params, omega), folder / names[2])
+        write_results(folder, result)
     if args.json:
         print_json(result)
         return 0
@@ -123,53 +141,77 @@ def run(args) -> int:
     for row in result["table"]:
         print(f"  {row['amplitude']:10.3g} {row['ceq_stiction']:14.4g} {row['ceq_lugre']:12.4g} "
               f"{row['keq_lugre']:12.4g}")
-    for f in files:
-        print(f"  wrote {f}")
+    print(f"  wrote {run_out.path}")
     return 0
+
+
+FIXABLE = ("fc", "fs", "vs", "delta", "sigma2")  # the steady-state parameters
 
 
 def _fixed(items) -> dict[str, float]:
     fixed = {}
     for item in items:
         name, sep, value = item.partition("=")
+        name = name.strip()
         if not sep:
-            raise ValueError(f"--fix expects NAME=VALUE, got {item!r}")
+            raise ValueError(f"--fix expects NAME=VALUE, got {item!r}; e.g. --fix delta=1")
+        if name not in FIXABLE:
+            raise ValueError(f"--fix {item!r}: {name!r} is not a steady-state parameter; use "
+                             f"one of {', '.join(FIXABLE)}")
         try:
-            fixed[name.strip()] = float(value)
-        except ValueError as exc:
-            raise ValueError(f"--fix {item!r}: {value!r} is not a number") from exc
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not math.isfinite(number):
+            raise ValueError(f"--fix {item!r}: {value!r} is not a finite number; give the value "
+                             "in SI units, e.g. --fix delta=1")
+        fixed[name] = number
     return fixed
 
 
 def run_fit(args) -> int:
-    base = lugre.LuGreParameters.named(args.params)
+    from .. import progress
+
+    with progress.task("loading the friction models"):
+        from ..friction import identify, lugre
+
+    base = lugre.LuGreParameters.named(getattr(args, "params", "bianchi2014"))
     data = identify.read_friction_csv(args.data)
     fixed = _fixed(args.fix)
+    if fixed and data.kind != "steady_state":
+        raise ValueError("--fix applies to steady-state (v, F) data only")
     name = "fit_stribeck.png" if data.kind == "steady_state" else "fit_presliding.png"
-    files = [] if args.no_plots else [args.out / name]
-    report.check_writable(files, args.force)
-    if data.kind == "steady_state":
-        fit = identify.fit_steady_state(data.velocity, data.force, fixed=fixed, base=base)
-        if files:
-            fig = plots.plot_stribeck(fit.parameters, data.velocity, data.force,
-                                      title="Measured and fitted sliding friction (Fig 7)")
-            report.save_figure(fig, files[0], args.force)
-    else:
-        if fixed:
-            raise ValueError("--fix applies to steady-state (v, F) data only")
-        fit = identify.fit_presliding(data.t, data.displacement, data.force, base)
-        if files:
+    names = [] if args.no_plots else [name]
+    run_out = RunOutput.for_args(args, "friction_fit", Path(args.data).stem,
+                                 ["results.json", *names])
+    with progress.task(f"fitting {args.data}"):
+        if data.kind == "steady_state":
+            fit = identify.fit_steady_state(data.velocity, data.force, fixed=fixed, base=base)
+        else:
+            fit = identify.fit_presliding(data.t, data.displacement, data.force, base)
+    result = fit.to_dict()
+    result["data"] = str(args.data)
+    result["folder"] = str(run_out.path)
+    result["figures"] = [str(run_out.file(n)) for n in names]
+    with progress.task(f"writing {run_out.path}"), run_out.writing() as folder:
+        if names and data.kind == "steady_state":
+            from .. import plots
+
+            save_figure(plots.plot_stribeck(fit.parameters, data.velocity, data.force,
+                                            title="Measured and fitted sliding friction (Fig 7)"),
+                        folder / names[0])
+        elif names:
+            from .. import plots
+
             response = lugre.simulate_lugre(fit.parameters, data.t,
                                             displacement=data.displacement,
                                             z0=fit.estimate("f0")[0] / fit.parameters.sigma0)
             title = (f"Measured and fitted presliding friction (Fig 2 / Fig 8)\n"
                      f"sigma0 = {fit.parameters.sigma0:.4g} N/m, "
                      f"sigma1 = {fit.parameters.sigma1:.4g} N s/m")
-            report.save_figure(plots.plot_response_hysteresis(response, data.force, title),
-                               files[0], args.force)
-    result = fit.to_dict()
-    result["data"] = str(args.data)
-    result["figures"] = [str(f) for f in files]
+            save_figure(plots.plot_response_hysteresis(response, data.force, title),
+                        folder / names[0])
+        write_results(folder, result)
     if args.json:
         print_json(result)
         return 0
@@ -179,6 +221,5 @@ def run_fit(args) -> int:
         print(f"  {n:>7} = {v:.6g} +- {s:.2g}")
     for n, v in fit.fixed.items():
         print(f"  {n:>7} = {v:.6g} (fixed)")
-    for f in files:
-        print(f"  wrote {f}")
+    print(f"  wrote {run_out.path}")
     return 0

@@ -2,21 +2,61 @@
 
 from __future__ import annotations
 
+import argparse
 import warnings
+from pathlib import Path
 
-from .. import chatter, plots, report
 from ._common import (
+    COUNT,
+    CliError,
+    RunOutput,
+    add_common_options,
     add_contact_options,
-    add_output_options,
     axis_from_args,
     contact_from_args,
+    number,
     print_json,
+    require_section,
+    save_figure,
+    write_results,
 )
 
+__all__ = ["add_parser", "run", "BENCHMARK"]
+
 BENCHMARK = {"teeth": 2, "kt": 6e8, "kn": 2e8, "immersion": 1.0, "milling": "down"}
+SETUP_FLAGS = {"teeth": "--teeth", "kt": "--kt", "kn": "--kn", "immersion": "--immersion",
+               "milling": "--milling"}
+DEFAULT_INTERVALS = 40  # servotune.chatter.sdm.DEFAULT_INTERVALS (tests check they agree)
 
 HZ = 1.0 / (2.0 * 3.141592653589793)
 MM = 1e-3
+
+_TEETH = number(1, 100, integer=True, example=4)
+_COEFFICIENT = number(0.0, 1e12, low_open=True, example="6e8", unit="N/m^2")
+_NORMAL = number(0.0, 1e12, example="2e8", unit="N/m^2")
+_IMMERSION = number(0.0, 1.0, low_open=True, example=0.5)
+_RPM = number(0.0, 1e6, low_open=True, example=12000, unit="rpm")
+_SPEEDS = number(2, 100_000, integer=True, example=2000)
+_INTERVALS = number(4, 1000, integer=True, example=DEFAULT_INTERVALS)
+_DEPTH_MM = number(0.0, 1e4, low_open=True, example=2, unit="mm")
+_MODE_PARTS = (("FN_HZ", number(0.0, 1e6, low_open=True, example=900, unit="Hz")),
+               ("ZETA", number(0.0, 1.0, low_open=True, high_open=True, example=0.02)),
+               ("K_N_PER_M", number(0.0, 1e15, low_open=True, example="1e7", unit="N/m")))
+
+
+class _ModeAction(argparse.Action):
+    """``--mode FN_HZ ZETA K_N_PER_M``, each part checked against its own range."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        parsed = []
+        for text, (name, parse) in zip(values, _MODE_PARTS, strict=True):
+            try:
+                parsed.append(parse(text))
+            except argparse.ArgumentTypeError as exc:
+                raise argparse.ArgumentError(self, f"{name}: {exc}") from None
+        items = list(getattr(namespace, self.dest, None) or [])
+        items.append(tuple(parsed))
+        setattr(namespace, self.dest, items)
 
 
 def add_parser(subparsers) -> None:
@@ -33,11 +73,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("axis", nargs="?", metavar="AXIS",
                    help="an axis folder (e.g. models/paper_x_axis)")
     add_contact_options(p, default="viscous")
-    p.add_argument("--mode", nargs=3, type=float, action="append", default=[],
+    p.add_argument("--mode", nargs=3, action=_ModeAction, default=[],
                    metavar=("FN_HZ", "ZETA", "K_N_PER_M"),
                    help="a mode of the compliance in --direction: natural frequency [Hz], "
                         "damping ratio [-], modal stiffness [N/m] (repeatable)")
-    p.add_argument("--mode-y", nargs=3, type=float, action="append", default=[],
+    p.add_argument("--mode-y", nargs=3, action=_ModeAction, default=[],
                    metavar=("FN_HZ", "ZETA", "K_N_PER_M"),
                    help="a mode in y, normal to the feed (repeatable), for 2-D compliance")
     p.add_argument("--direction", choices=("x", "y"), default="x",
@@ -46,36 +86,37 @@ def add_parser(subparsers) -> None:
     p.add_argument("--frf", metavar="FILE.csv",
                    help="measured compliance: columns f_hz and re_ij_m_per_n, im_ij_m_per_n for "
                         "ij in xx, xy, yx, yy (at least xx or yy)")
-    p.add_argument("--teeth", type=int, default=None, help="number of teeth (2)")
-    p.add_argument("--kt", type=float, default=None,
+    p.add_argument("--teeth", type=_TEETH, default=None, help="number of teeth (2)")
+    p.add_argument("--kt", type=_COEFFICIENT, default=None,
                    help="tangential cutting coefficient Kt [N/m^2] (6e8)")
-    p.add_argument("--kn", type=float, default=None,
+    p.add_argument("--kn", type=_NORMAL, default=None,
                    help="normal (radial) cutting coefficient Kn [N/m^2] (2e8); "
                         "Altintas' ratio Kr = Kn/Kt")
-    p.add_argument("--immersion", type=float, default=None,
+    p.add_argument("--immersion", type=_IMMERSION, default=None,
                    help="radial immersion a/D in (0, 1] (1 = full slot)")
     p.add_argument("--milling", choices=("down", "up"), default=None,
                    help="down (climb) or up (conventional) milling (down)")
-    p.add_argument("--speed-rpm", nargs=2, type=float, metavar=("MIN", "MAX"),
+    p.add_argument("--speed-rpm", nargs=2, type=_RPM, metavar=("MIN", "MAX"),
                    help="spindle-speed range [rpm] (default: the first ten lobes)")
-    p.add_argument("--speeds", type=int,
+    p.add_argument("--speeds", type=_SPEEDS,
                    help="number of spindle speeds (default 2000 for zoa, 200 for sdm)")
     p.add_argument("--method", choices=("zoa", "sdm"), default="zoa",
                    help="zoa: zero-order approximation; sdm: semi-discretisation (slower; "
                         "finds the flip lobes of low immersion; needs --mode)")
-    p.add_argument("--lobes", type=int, help="zoa: number of lobes (default: enough for MIN)")
-    p.add_argument("--intervals", type=int, default=chatter.DEFAULT_INTERVALS,
-                   help=f"sdm: intervals per tooth period ({chatter.DEFAULT_INTERVALS})")
-    p.add_argument("--depth-max-mm", type=float,
+    p.add_argument("--lobes", type=COUNT, help="zoa: number of lobes (default: enough for MIN)")
+    p.add_argument("--intervals", type=_INTERVALS, default=DEFAULT_INTERVALS,
+                   help=f"sdm: intervals per tooth period ({DEFAULT_INTERVALS})")
+    p.add_argument("--depth-max-mm", type=_DEPTH_MM,
                    help="sdm: deepest cut examined [mm] (default 5 x the zero-order b_crit)")
-    p.add_argument("--required-depth-mm", type=float,
+    p.add_argument("--required-depth-mm", type=_DEPTH_MM,
                    help="required axial depth [mm]: report the chatter margin")
-    p.add_argument("--no-plots", action="store_true", help="do not write the figure")
-    add_output_options(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
 def _compliance(args):
+    from .. import chatter
+
     modes = ([chatter.Mode.from_hz(*m, direction=args.direction) for m in args.mode]
              + [chatter.Mode.from_hz(*m, direction="y") for m in args.mode_y])
     given = [name for name, ok in (("AXIS", args.axis is not None), ("--mode", bool(modes)),
@@ -104,7 +145,22 @@ def _compliance(args):
 
 
 def _setup(args, axis):
+    """The milling set-up and, when the benchmark fills in values, a note saying which."""
+    from .. import chatter
+
     base = dict(BENCHMARK)
+    missing = [flag for key, flag in SETUP_FLAGS.items() if getattr(args, key) is None]
+    if axis is not None and axis.cutting is None and missing:
+        require_section(axis, "cutting", "[cutting]",
+                        "servotune lobes AXIS (the milling set-up of the chatter limit)",
+                        f", or give the whole set-up on the command line (missing: "
+                        f"{', '.join(missing)})")
+    note = None
+    if axis is None and missing:
+        note = ("cutting set-up not given in full: " + ", ".join(
+            f"{flag} {BENCHMARK[key]:g}" if not isinstance(BENCHMARK[key], str) else
+            f"{flag} {BENCHMARK[key]}" for key, flag in SETUP_FLAGS.items()
+            if getattr(args, key) is None) + " from the Insperger-Stepan benchmark")
     if axis is not None and axis.cutting is not None:
         c = axis.cutting
         base = {"teeth": c.setup.teeth, "kt": c.setup.kt, "kn": c.setup.kn,
@@ -117,33 +173,47 @@ def _setup(args, axis):
               for k, v in base.items()}
     return chatter.MillingSetup(teeth=values["teeth"], kt=values["kt"], kn=values["kn"],
                                 radial_immersion=values["immersion"],
-                                milling=values["milling"])
+                                milling=values["milling"]), note
+
+
+def _subject(args, axis) -> str:
+    if axis is not None:
+        return axis.name
+    if args.frf:
+        return Path(args.frf).stem
+    return "modes"
 
 
 def run(args) -> int:
-    system, source, axis = _compliance(args)
-    setup = _setup(args, axis)
+    from .. import progress
+
+    with progress.task("loading the compliance"):
+        from .. import chatter
+
+        system, source, axis = _compliance(args)
+    setup, note = _setup(args, axis)
+    if args.speed_rpm is not None and not args.speed_rpm[0] < args.speed_rpm[1]:
+        raise CliError(f"--speed-rpm {args.speed_rpm[0]:g} {args.speed_rpm[1]:g}: the speed "
+                       "range needs MIN < MAX")
     required = None if args.required_depth_mm is None else args.required_depth_mm * MM
-    figure = args.out / f"lobes_{args.method}.png"
-    files = [] if args.no_plots else [figure]
-    report.check_writable(files, args.force)
+    names = [] if args.no_plots else [f"lobes_{args.method}.png"]
+    run_out = RunOutput.for_args(args, "lobes", _subject(args, axis), ["results.json", *names])
     count = args.speeds if args.speeds is not None else (2000 if args.method == "zoa" else 200)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        speeds = chatter.spindle_speeds(system, setup, args.speed_rpm, count,
-                                        direction=args.direction)
-        zoa = chatter.stability_lobes(system, setup, speeds, direction=args.direction,
-                                      lobes=args.lobes)
+        with progress.task("stability lobes, zero-order approximation"):
+            speeds = chatter.spindle_speeds(system, setup, args.speed_rpm, count,
+                                            direction=args.direction)
+            zoa = chatter.stability_lobes(system, setup, speeds, direction=args.direction,
+                                          lobes=args.lobes)
         if args.method == "sdm":
             depth_max = None if args.depth_max_mm is None else args.depth_max_mm * MM
-            result = chatter.sdm_lobes(system, setup, speeds, depth_max,
-                                       intervals=args.intervals, direction=args.direction)
+            with progress.task(f"stability lobes, semi-discretisation ({len(speeds)} speeds)"):
+                result = chatter.sdm_lobes(system, setup, speeds, depth_max,
+                                           intervals=args.intervals, direction=args.direction)
             shown = [result, zoa]
         else:
             result, shown = zoa, [zoa]
-    if files:
-        report.save_figure(plots.plot_stability_lobes(shown, required_depth=required),
-                           figure, args.force)
     out = result.to_dict()
     out["compliance"] = source
     if args.method == "sdm":
@@ -153,7 +223,16 @@ def run(args) -> int:
         out["required_depth_m"] = required
         out["margin"] = result.margin(required)
     out["warnings"] = [str(w.message) for w in caught]
-    out["figures"] = [str(f) for f in files]
+    out["notes"] = [note] if note else []
+    out["folder"] = str(run_out.path)
+    out["figures"] = [str(run_out.file(n)) for n in names]
+    with progress.task(f"writing {run_out.path}"), run_out.writing() as folder:
+        if names:
+            from .. import plots
+
+            save_figure(plots.plot_stability_lobes(shown, required_depth=required),
+                        folder / names[0])
+        write_results(folder, out)
     if args.json:
         print_json(out)
         return 0
@@ -178,8 +257,9 @@ def run(args) -> int:
     if required is not None:
         print(f"  margin at {required / MM:g} mm : {out['margin']:.3f} "
               f"({'stable' if out['margin'] > 1 else 'chatter'} at the worst speed)")
+    for message in out["notes"]:
+        print(f"  note: {message}")
     for message in out["warnings"]:
         print(f"  warning: {message}")
-    for f in files:
-        print(f"  wrote {f}")
+    print(f"  wrote {run_out.path}")
     return 0

@@ -10,8 +10,14 @@ from __future__ import annotations
 
 import math
 
-from ..axis import load_axis
-from ._common import add_output_options, print_json
+from ._common import (
+    COUNT,
+    RunOutput,
+    add_common_options,
+    default_notes,
+    print_json,
+    write_results,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -33,18 +39,25 @@ def add_parser(subparsers) -> None:
                    help="guide-way pads held (stiction at standstill) or free (default free)")
     p.add_argument("--motor", choices=("locked", "free"), default="free",
                    help="motor rotor held (a stiff servo) or free (default free)")
-    p.add_argument("--count", type=int, default=None,
+    p.add_argument("--count", type=COUNT, default=None,
                    help="show only the lowest COUNT modes in the text output")
-    add_output_options(p, default_out=None)
+    add_common_options(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    axis = load_axis(args.axis)
+    from .. import progress
+
+    with progress.task(f"loading {args.axis}"):
+        from ..axis import load_axis
+
+        axis = load_axis(args.axis)
+    out = RunOutput.for_args(args, "modes", axis.name, ["results.json"])
     model = axis.configuration(pads=args.pads, motor=args.motor)
-    omega = model.natural_frequencies()
-    zeta = model.modal_damping_ratios()
-    share = model.participation(WP_X)
+    with progress.task(f"{axis.name}: modes of {model.n} DOFs"):
+        omega = model.natural_frequencies()
+        zeta = model.modal_damping_ratios()
+        share = model.participation(WP_X)
     j = int(share.argmax())
     rigid = int((omega == 0).sum())
     band = axis.requirements.band
@@ -61,7 +74,12 @@ def run(args) -> int:
         "rigid_body_modes": rigid,
         "wp_x_peak_compliance": None if peak is None else peak["wp_x_peak_compliance"],
         "wp_x_peak_hz": None if peak is None else peak["wp_x_peak_hz"],
+        "band_hz": [band[0] * HZ, band[1] * HZ],
+        "notes": default_notes(axis),
+        "folder": str(out.path),
     }
+    with out.writing() as folder:
+        write_results(folder, result)
     if args.json:
         print_json(result)
         return 0
@@ -77,5 +95,8 @@ def run(args) -> int:
           "compliance at wp.x)")
     if peak is not None:
         print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
-              f"{peak['wp_x_peak_hz']:.2f} Hz ({band[0]:g}-{band[1]:g} Hz)")
+              f"{peak['wp_x_peak_hz']:.2f} Hz ({band[0] * HZ:g}-{band[1] * HZ:g} Hz)")
+        for note in result["notes"]:
+            print(f"  note: {note}")
+    print(f"  wrote {out.path}")
     return 0

@@ -8,15 +8,23 @@ simulated table beside the paper's and checks the remarks A-C.
 
 from __future__ import annotations
 
-import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from ..simulate import table3 as t3
-from ..simulate.setup import axis_setup
-from ._common import add_output_options, print_json
+from ._common import (
+    CliError,
+    RunOutput,
+    add_common_options,
+    add_duration_option,
+    add_workers_option,
+    default_workers,
+    number,
+    print_json,
+    write_results,
+)
 
 __all__ = ["add_parser", "run", "default_axis", "load_setup"]
+
+_FREQUENCY = number(0.0, 1e4, low_open=True, example=10, unit="Hz")
 
 
 def default_axis() -> Path:
@@ -28,11 +36,9 @@ def load_setup(path, continuous: bool = True):
     """Load an axis description (``servotune.axis.load_axis``) and turn it into the set-up of
     the simulation; ``continuous`` takes the drive in continuous time, as the paper models it
     (sec 3), instead of the digital drive of ``[drive.sampling]``."""
-    try:
-        from ..axis import load_axis
-    except ImportError as exc:  # pragma: no cover - until servotune.axis is merged
-        raise RuntimeError("reading axis descriptions needs servotune.axis (load_axis), which "
-                           "this installation lacks") from exc
+    from ..axis import load_axis
+    from ..simulate.setup import axis_setup
+
     path = Path(path)
     if not (path / "axis.toml").is_file():
         raise FileNotFoundError(f"{path} has no axis.toml; give an axis folder such as "
@@ -51,41 +57,42 @@ def add_parser(subparsers) -> None:
                     "checks its remarks A-C.")
     p.add_argument("axis", nargs="?", default=None,
                    help="axis folder with axis.toml (default: the bundled models/paper_x_axis)")
-    p.add_argument("--workers", type=int, default=2,
-                   help="parallel processes (default 2; 1 runs in this process)")
-    p.add_argument("--duration", type=float, default=20.0,
-                   help="sweep time [s] (default 20; the window is the last 90 %%)")
-    p.add_argument("--f-start-hz", type=float, default=10.0, help="sweep start (default 10 Hz)")
-    p.add_argument("--f-end-hz", type=float, default=100.0, help="sweep end (default 100 Hz)")
-    p.add_argument("--quiet", action="store_true", help="no progress report on standard error")
-    add_output_options(p, default_out=None)
+    add_workers_option(p)
+    add_duration_option(p)
+    p.add_argument("--f-start-hz", type=_FREQUENCY, default=10.0,
+                   help="sweep start (default 10 Hz)")
+    p.add_argument("--f-end-hz", type=_FREQUENCY, default=100.0,
+                   help="sweep end (default 100 Hz)")
+    add_common_options(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    if args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
-    if not args.duration > 0:
-        raise ValueError(f"--duration must be a positive number of seconds, got {args.duration}")
-    setup = load_setup(args.axis if args.axis is not None else default_axis())
+    from .. import interrupt, progress
+
+    if not args.f_start_hz < args.f_end_hz:
+        raise CliError(f"--f-start-hz {args.f_start_hz:g} and --f-end-hz {args.f_end_hz:g}: the "
+                       "sweep needs start < end")
+    with progress.task("loading the axis"):
+        from ..simulate import table3 as t3
+
+        setup = load_setup(args.axis if args.axis is not None else default_axis())
+    out = RunOutput.for_args(args, "table3", setup.name, ["results.json"])
     settings = t3.SweepSettings(f_start_hz=args.f_start_hz, f_end_hz=args.f_end_hz,
                                 duration=args.duration,
                                 window=(0.1 * args.duration, args.duration))
-    show = not args.quiet and sys.stderr.isatty()
-
-    def progress(done, total):
-        sys.stderr.write(f"\r  trials done: {done}/{total}")
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-    if args.workers == 1:
-        table = t3.table3(setup, None, settings=settings, progress=progress if show else None)
-    else:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            table = t3.table3(setup, pool, settings=settings,
-                              progress=progress if show else None)
+    workers = args.workers or default_workers()
+    with progress.task(f"Table 3 sine sweeps on {setup.name}", total=len(t3.TRIALS),
+                       unit="trials") as task:
+        if workers == 1:
+            table = t3.table3(setup, None, settings=settings, progress=task.report)
+        else:
+            with interrupt.process_pool(workers) as pool:
+                table = t3.table3(setup, pool, settings=settings, progress=task.report)
     result = table.to_dict()
+    result["folder"] = str(out.path)
+    with out.writing() as folder:
+        write_results(folder, result)
     if args.json:
         print_json(result)
         return 0
@@ -111,4 +118,5 @@ def run(args) -> int:
     for key, remark in table.remarks.items():
         print(f"remark {key}: {'holds' if remark['holds'] else 'does NOT hold'} - "
               f"{remark['detail']}")
+    print(f"wrote {out.path}")
     return 0

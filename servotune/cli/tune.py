@@ -1,40 +1,46 @@
 """``servotune tune``: tune guide-way damping and servo gains of an axis, verify, report.
 
 Exit status: 0 when the design is verified (the linear checks hold in every regime model and
-the nonlinear axis holds the claim in every regime), 1 when it is not, 3 when the linear checks
-hold but the nonlinear verification was skipped (``--no-simulation``), 2 for bad input.
+the nonlinear axis holds the claim in every regime), 1 when it is not (or the input is bad), 3
+when the linear checks hold but the nonlinear verification was skipped (``--no-simulation``),
+2 for a bad flag, 130 when interrupted.
 """
 
 from __future__ import annotations
 
-from .. import report, summary
-from ..axis import load_axis
-from ..design import tune_axis
-from ._common import add_output_options, print_json, to_jsonable
+import argparse
 
-__all__ = ["add_parser", "run", "EXIT_VERIFIED", "EXIT_NOT_VERIFIED", "EXIT_LINEAR_ONLY"]
+from ._common import (
+    STARTS,
+    FRACTION,
+    RunOutput,
+    add_common_options,
+    add_workers_option,
+    default_workers,
+    print_json,
+    require_section,
+    save_figure,
+    to_jsonable,
+    write_results,
+)
+
+__all__ = ["add_parser", "run", "exit_status", "EXIT_VERIFIED", "EXIT_NOT_VERIFIED",
+           "EXIT_LINEAR_ONLY"]
 
 VARIABLES = ("c", "kv", "kp", "ti")
 EXIT_VERIFIED, EXIT_NOT_VERIFIED, EXIT_LINEAR_ONLY = 0, 1, 3
+FIGURES = ("compliance.png", "nonlinear.png", "bode_before.png", "bode_after.png", "lobes.png",
+           "modes.png", "two_mass.png")
 
 
 def _free(text: str) -> tuple[str, ...]:
     names = tuple(v.strip().lower() for v in text.split(",") if v.strip())
     unknown = [v for v in names if v not in VARIABLES]
-    if unknown or not names:
-        raise ValueError(f"--free takes a comma-separated subset of {','.join(VARIABLES)}, "
-                         f"got {text!r}")
+    if unknown or not names or len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not accepted: give a comma-separated subset of "
+            f"{','.join(VARIABLES)} (e.g. c,kv)")
     return names
-
-
-def _starts(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise ValueError(f"--starts takes a whole number from 1 to 50, got {text!r}") from None
-    if not 1 <= value <= 50:
-        raise ValueError(f"--starts takes a whole number from 1 to 50, got {value}")
-    return value
 
 
 def add_parser(subparsers) -> None:
@@ -49,23 +55,21 @@ def add_parser(subparsers) -> None:
                     "and on the nonlinear axis (LuGre friction, time simulation); print the "
                     "result and write results.json, figures and report.html. Exit status: 0 "
                     "verified, 1 not verified, 3 linear check only (--no-simulation), 2 bad "
-                    "input.")
+                    "flag, 130 interrupted.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
     p.add_argument("--free", type=_free, default=None,
                    help="design variables the optimiser may change (default: [tuning] free "
                         "of the axis, else c,kv,kp,ti)")
-    p.add_argument("--chatter-weight", type=float, default=None,
+    p.add_argument("--chatter-weight", type=FRACTION, default=None,
                    help="weight in [0, 1] of the chatter limit against the compliance peak "
                         "(default: [tuning] chatter_weight of the axis, else 0)")
-    p.add_argument("--starts", type=_starts, default=4,
-                   help="starting points, 1 to 50 (default 4)")
+    p.add_argument("--starts", type=STARTS, default=4,
+                   help="starting points, 1 to 100 (default 4)")
     p.add_argument("--no-simulation", action="store_true",
                    help="skip the nonlinear verification (the design is then not called "
                         "verified; exit status 3 when the linear checks hold)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="processes for the nonlinear simulations (default: as many as CPUs, "
-                        "1 = serial)")
-    add_output_options(p, default_out="out/tune_AXISNAME")
+    add_workers_option(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
@@ -79,37 +83,51 @@ def exit_status(job) -> int:
 
 
 def run(args) -> int:
-    if args.workers is not None and args.workers < 1:
-        raise ValueError("--workers must be a whole number >= 1")
-    axis = load_axis(args.axis)
-    out = (report.default_folder(f"tune_{axis.name}") if str(args.out) == "out/tune_AXISNAME"
-           else args.out)
-    names = ["report.html", "results.json", "compliance.png", "nonlinear.png",
-             "bode_before.png", "bode_after.png", "lobes.png", "modes.png", "two_mass.png"]
-    report.check_writable([out / n for n in names], args.force)
+    from .. import interrupt, progress
+
+    with progress.task(f"loading {args.axis}"):
+        from .. import report, summary
+        from ..axis import load_axis
+        from ..design import tune_axis
+
+        axis = load_axis(args.axis)
+    require_section(axis, "friction", "[friction]",
+                    "servotune tune (the guide-way pads are where C acts)")
+    notes = []
+    if axis.drive is None:
+        notes.append("no [drive]: the structure with viscous guide-way pads alone is tuned "
+                     "(C only, the paper's sec 4.1 analysis without control)")
+    files = ["report.html", "results.json"] + ([] if args.no_plots else list(FIGURES))
+    out = RunOutput.for_args(args, "tune", axis.name, files)
     simulate = (not args.no_simulation and axis.drive is not None
                 and axis.friction is not None)
-    executor = None
-    if simulate and args.workers != 1:
-        from concurrent.futures import ProcessPoolExecutor
+    workers = args.workers or default_workers()
+    with progress.task(f"{axis.name}: tuning", unit="solve") as tuning:
+        pool_cm = (interrupt.process_pool(workers) if simulate and workers > 1
+                   else _no_pool())
+        with pool_cm as pool:
+            def report_sims(done, total):
+                tuning.report(done, total)
 
-        executor = ProcessPoolExecutor(max_workers=args.workers)
-    try:
-        job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
-                        starts=args.starts, simulate=simulate, executor=executor)
-    finally:
-        if executor is not None:
-            executor.shutdown()
+            job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
+                            starts=args.starts, simulate=simulate, executor=pool,
+                            progress=report_sims)
+    interrupt.check("the tuning")
     results = job.to_dict()
-    figures = report.tuning_figures(job)
-    files = [report.save_figure(fig, out / file, args.force) for file, _, fig in figures]
-    html_path = report.write_html_report(
-        job, out, args.force, figures=[(out / file, title) for file, title, _ in figures])
-    results["files"] = [str(f) for f in files]
-    results["report"] = str(html_path)
-    report.write_json(out / "results.json", to_jsonable(results), force=args.force)
+    results["notes"] = notes + results["notes"]
     status = exit_status(job)
     results["exit_status"] = status
+    results["folder"] = str(out.path)
+    with progress.task(f"writing {out.path}"), out.writing() as folder:
+        figures = [] if args.no_plots else report.tuning_figures(job)
+        paths = []
+        for file, title, fig in figures:
+            save_figure(fig, folder / file)
+            paths.append((folder / file, title))
+        report.write_html_report(job, folder, force=True, figures=paths)
+        results["files"] = [str(out.file(p.name)) for p, _ in paths]
+        results["report"] = str(out.file("report.html"))
+        write_results(folder, to_jsonable(results))
     if args.json:
         print_json(results)
         return status
@@ -117,6 +135,8 @@ def run(args) -> int:
     print(f"{axis.name}: tuned {', '.join(r.problem.free)} over {r.stats['models']} regime "
           f"models ({r.stats['starts']} starts, {r.stats['iterations']} IPOPT iterations, "
           f"{r.stats['time_s']:.1f} s)")
+    for line in notes:
+        print(f"  note: {line}")
     for table in (summary.inputs_table(job), summary.design_table(job),
                   summary.regimes_table(job), summary.thrust_table(job),
                   summary.realisation_table(job), summary.loops_table(job)):
@@ -132,6 +152,14 @@ def run(args) -> int:
     print("  " + head)
     for line in lines:
         print("    " + line)
-    print(f"  wrote {out / 'results.json'} and {len(files)} figures")
-    print(f"  report: {html_path}")
+    print(f"  wrote {out.path} (results.json, {len(results['files'])} figures, report.html)")
+    print(f"  report: {out.file('report.html')}")
     return status
+
+
+class _no_pool:
+    def __enter__(self):
+        return None
+
+    def __exit__(self, *exc):
+        return False

@@ -2,46 +2,64 @@
 
 from __future__ import annotations
 
-import warnings
+from ._common import (
+    RunOutput,
+    add_common_options,
+    number,
+    print_json,
+    save_figure,
+    write_results,
+)
 
-from .. import plots, report, twomass
-from ._common import add_output_options, print_json
+__all__ = ["add_parser", "run"]
 
 HZ = 1.0 / (2.0 * 3.141592653589793)
+FIGURES = ("fig5_compliance.png", "fig4_g_alpha.png")
+
+_MASS = number(0.0, 1e9, low_open=True, example=5000, unit="kg")
+_STIFFNESS = number(0.0, 1e13, low_open=True, example="16e6", unit="N/m")
+_ALPHA = number(0.0, 100.0, low_open=True, example=0.3)
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "twomass", help="fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
         description="Fixed points, optimal guide-way damping Copt, optimal peak and limit "
-                    "resonances of the two-mass layouts of sec 4.1; writes Fig 4 and Fig 5. "
-                    "Defaults are the paper's Fig 5 system.")
-    p.add_argument("--m1", type=float, default=5000.0, help="slide mass M1 [kg] (5000)")
-    p.add_argument("--k", type=float, default=16e6, help="stiffness K [N/m] (16e6)")
-    p.add_argument("--alpha", type=float, default=0.3, help="mass ratio M2/M1 [-] (0.3)")
+                    "resonances of the two-mass layouts of sec 4.1; writes Fig 4 and Fig 5 "
+                    "into OUT/twomass_layout_<A|B>. Defaults are the paper's Fig 5 system.")
+    p.add_argument("--m1", type=_MASS, default=5000.0, help="slide mass M1 [kg] (5000)")
+    p.add_argument("--k", type=_STIFFNESS, default=16e6, help="stiffness K [N/m] (16e6)")
+    p.add_argument("--alpha", type=_ALPHA, default=0.3, help="mass ratio M2/M1 [-] (0.3)")
     p.add_argument("--layout", choices=("A", "B"), default="B",
                    help="B: ground-C-M1-K-M2 (paper Eq 1-7); A: ground-K-M2-C-M1 "
                         "(an interpretation of the paper's unreadable figure)")
-    p.add_argument("--no-plots", action="store_true", help="do not write figures")
-    add_output_options(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    import warnings
+
+    from .. import twomass
+
     system = twomass.TwoMassSystem(m1=args.m1, k=args.k, alpha=args.alpha, layout=args.layout)
-    files = [] if args.no_plots else [args.out / f"fig5_compliance_layout_{system.layout}.png",
-                                      args.out / "fig4_g_alpha.png"]
-    report.check_writable(files, args.force)
+    names = [] if args.no_plots else list(FIGURES)
+    out = RunOutput.for_args(args, "twomass", f"layout_{system.layout}", ["results.json", *names])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         analysis = twomass.analyse_two_mass(system)
-    if files:
-        report.save_figure(plots.plot_two_mass_compliance(analysis), files[0], args.force)
-        report.save_figure(plots.plot_g_alpha(mark=system.alpha if system.layout == "B" else None),
-                           files[1], args.force)
     result = analysis.to_dict()
     result["warnings"] = [str(w.message) for w in caught]
-    result["figures"] = [str(f) for f in files]
+    result["folder"] = str(out.path)
+    result["figures"] = [str(out.file(n)) for n in names]
+    with out.writing() as folder:
+        if names:
+            from .. import plots
+
+            save_figure(plots.plot_two_mass_compliance(analysis), folder / names[0])
+            save_figure(plots.plot_g_alpha(mark=system.alpha if system.layout == "B" else None),
+                        folder / names[1])
+        write_results(folder, result)
     if args.json:
         print_json(result)
         return 0
@@ -55,6 +73,6 @@ def run(args) -> int:
     print(f"  resonance C -> inf  : {result['resonance_cinf_hz']:.3f} Hz")
     for message in result["warnings"]:
         print(f"  warning: {message}")
-    for f in files:
-        print(f"  wrote {f}")
+    print(f"  wrote {out.path}")
     return 0
+

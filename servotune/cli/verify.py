@@ -16,7 +16,15 @@ import json
 import math
 from pathlib import Path
 
-from ._common import add_output_options, print_json
+from ._common import (
+    RunOutput,
+    add_common_options,
+    add_workers_option,
+    default_workers,
+    print_json,
+    save_figure,
+    write_results,
+)
 
 __all__ = ["add_parser", "run", "read_result"]
 
@@ -83,20 +91,22 @@ def add_parser(subparsers) -> None:
                    help="sweep start [Hz] (default: from the axis' band and modes)")
     p.add_argument("--f-end-hz", type=_positive("--f-end-hz"), default=None,
                    help="sweep end [Hz] (default: from the axis' band and modes)")
-    p.add_argument("--workers", type=int, default=1, help="parallel processes (default 1)")
-    add_output_options(p, default_out=None)
+    add_workers_option(p)
+    add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from ..axis import load_axis
-    from ..design import check_design
-    from ..tuning import Design
-    from ..verdict import nonlinear_verdict
+    from .. import interrupt, progress
+
+    with progress.task(f"loading {args.result}"):
+        from .. import plots
+        from ..axis import load_axis
+        from ..design import check_design
+        from ..tuning import Design
+        from ..verdict import nonlinear_verdict
 
     axis_path, values = read_result(args.result)
-    if args.workers < 1:
-        raise ValueError("--workers must be a whole number >= 1")
     band = None
     if (args.f_start_hz is None) != (args.f_end_hz is None):
         raise ValueError("give both --f-start-hz and --f-end-hz, or neither")
@@ -108,23 +118,27 @@ def run(args) -> int:
     if axis.drive is None or axis.friction is None:
         raise ValueError(f"{axis.file}: the nonlinear verification needs [drive] and [friction]")
     design = Design(**values)
-    result = check_design(axis, design)
-    executor = None
-    if args.workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        executor = ProcessPoolExecutor(max_workers=args.workers)
-    try:
-        verdict = nonlinear_verdict(axis, result, executor=executor, forces=args.force_pp,
-                                    band_hz=band, speeds=args.speed, simulate_before=False)
-    finally:
-        if executor is not None:
-            executor.shutdown()
+    names = ["results.json"] + ([] if args.no_plots else ["nonlinear.png"])
+    output = RunOutput.for_args(args, "verify", axis.name, names)
+    with progress.task(f"{axis.name}: linear check"):
+        result = check_design(axis, design)
+    workers = args.workers or default_workers()
+    with progress.task(f"{axis.name}: nonlinear simulations", unit="run") as task, \
+            (interrupt.process_pool(workers) if workers > 1 else _NoPool()) as pool:
+        verdict = nonlinear_verdict(axis, result, executor=pool, forces=args.force_pp,
+                                    band_hz=band, speeds=args.speed, simulate_before=False,
+                                    progress=task.report)
     rows = [s.to_dict() for r in verdict.regimes for s in r.simulations]
     out = {"axis": str(axis.path), "axis_name": axis.name, "design": design.to_dict(),
            "verified": verdict.verified, "reasons": list(verdict.reasons),
            "regimes": [r.to_dict() for r in verdict.regimes], "rows": rows,
-           "checks": [c.to_dict() for c in result.checks]}
+           "checks": [c.to_dict() for c in result.checks], "folder": str(output.path)}
+    with output.writing() as folder:
+        if not args.no_plots:
+            save_figure(plots.plot_regime_verification(
+                verdict.regimes, title=f"{axis.name}: LuGre time simulation of the design"),
+                folder / "nonlinear.png")
+        write_results(folder, out)
     status = 0 if verdict.verified else 1
     if args.json:
         print_json(out)
@@ -148,3 +162,11 @@ def run(args) -> int:
     print(("VERIFIED" if verdict.verified else "NOT VERIFIED") + (
         "" if verdict.verified else ": " + "; ".join(verdict.reasons)))
     return status
+
+
+class _NoPool:
+    def __enter__(self):
+        return None
+
+    def __exit__(self, *exc):
+        return False

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from .. import interrupt
 from .ports import SymbolicPorts, responses
 from .problem import VARIABLES, Design, TuningProblem
 
@@ -374,6 +375,8 @@ class Solver:
         if multipliers is not None:
             args["lam_x0"], args["lam_g0"] = multipliers
         sol = self.solver(**args)
+        # IPOPT turns Ctrl-C into a failed solve: end the tuning instead of going on
+        interrupt.check("the tuning (IPOPT)")
         stats = self.solver.stats()
         x = np.array(sol["x"]).ravel()
         # IPOPT may end a hair outside a bound (its bound_relax_factor): clip to the bounds

@@ -1,0 +1,416 @@
+"""A catalogue of bad inputs across every command: each ends in a clear error.
+
+For each case: the exit status (2 for a flag argparse refuses, 1 for anything else), a message
+on standard error that names what was wrong (the field, the flag, the file), no traceback, no
+"internal error", and nothing written (every file under the test's folder, the current folder
+included, is the same before and after).
+
+A case is a small fixture: a function that prepares files in the test's folder and returns the
+command line. Cases that the code does not handle yet are marked xfail (strict) with the reason,
+so that they stay visible and turn into failures the day they are fixed.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from servotune.cli import main
+from servotune.template import template_toml, write_template
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT / "models" / "paper_x_axis"
+
+
+# --------------------------------------------------------------------------- fixtures
+
+@pytest.fixture(scope="module")
+def starter(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("starter") / "cat"
+    write_template(folder, name="cat")
+    return folder
+
+
+def axis(tmp, starter, change=None, drop=()) -> str:
+    """A copy of the starter axis in ``tmp/axis`` with ``change(text)`` applied to axis.toml
+    and the sections in ``drop`` removed."""
+    folder = tmp / "axis"
+    shutil.copytree(starter, folder)
+    text = template_toml("cat")
+    for section in drop:
+        text = _drop(text, section)
+    if change is not None:
+        new = change(text)
+        assert new != text, "the fixture changed nothing"
+        text = new
+    (folder / "axis.toml").write_text(text)
+    return str(folder)
+
+
+def _drop(text: str, section: str) -> str:
+    """Remove ``[section]`` and its sub-tables from a TOML text."""
+    out, skipping = [], False
+    for line in text.splitlines(keepends=True):
+        header = re.match(r"\[([a-z_.]+)\]", line)
+        if header:
+            name = header.group(1)
+            skipping = name == section or name.startswith(section + ".")
+        if not skipping:
+            out.append(line)
+    result = "".join(out)
+    assert result != text, f"no [{section}] in the template"
+    return result
+
+
+def sub(old: str, new: str):
+    """A change of axis.toml: replace ``old`` (which must be there) by ``new``."""
+    def change(text: str) -> str:
+        assert old in text, old
+        return text.replace(old, new)
+    return change
+
+
+def npz(tmp, name="m.npz", **arrays) -> str:
+    path = tmp / name
+    np.savez(path, **arrays)
+    return str(path)
+
+
+def text_file(tmp, name, content) -> str:
+    path = tmp / name
+    path.write_text(content)
+    return str(path)
+
+
+def spring_mass(n=3, scale=1.0):
+    m = np.eye(n) * 10.0 * scale
+    k = 2e6 * np.eye(n) - 1e6 * np.eye(n, k=1) - 1e6 * np.eye(n, k=-1)
+    return m, k
+
+
+def mtx(tmp, name, matrix) -> str:
+    from scipy.io import mmwrite
+
+    path = tmp / name
+    mmwrite(str(path), matrix)
+    return str(path)
+
+
+def stribeck_csv(tmp, name="stribeck.csv", rows=None, header="v_m_per_s,f_n") -> str:
+    if rows is None:
+        v = np.concatenate([-np.geomspace(1e-4, 0.5, 20), np.geomspace(1e-4, 0.5, 20)])
+        rows = [(x, 2000.0 * np.sign(x) + 5000.0 * x) for x in v]
+    body = "\n".join(",".join(f"{c:.9g}" if isinstance(c, float) else str(c) for c in r)
+                     for r in rows)
+    return text_file(tmp, name, header + "\n" + body + "\n")
+
+
+def frf_csv(tmp, content) -> str:
+    return text_file(tmp, "frf.csv", content)
+
+
+MODE = ["--mode", "922", "0.011", "1.34e6"]
+
+
+def xfail(reason):
+    return pytest.mark.xfail(reason=reason, strict=True)
+
+
+# --------------------------------------------------------------------------- the catalogue
+# (id, fixture: (tmp, starter) -> argv, exit status, words that must be in the message)
+
+CASES = [
+    # ---- axis files (read by `modes`, the quickest command that loads an axis)
+    ("axis-missing-toml", lambda t, s: ["modes", str(t)], 1, "no axis description"),
+    ("axis-missing-folder", lambda t, s: ["modes", str(t / "nowhere")], 1, "nowhere"),
+    ("axis-invalid-toml", lambda t, s: ["modes", axis(t, s, sub("[axis]", "[axis"))], 1,
+     "not valid TOML"),
+    ("axis-duplicate-key", lambda t, s: ["modes", axis(t, s, sub(
+        "teeth = 4", "teeth = 4\nteeth = 5"))], 1, "not valid TOML"),
+    ("axis-unknown-section", lambda t, s: ["modes", axis(t, s, sub("[axis]", "[axes]"))], 1,
+     "axes"),
+    ("axis-no-name", lambda t, s: ["modes", axis(t, s, sub('name = "cat"', 'nom = "cat"'))], 1,
+     "[axis] name"),
+    ("axis-empty-name", lambda t, s: ["modes", axis(t, s, sub('name = "cat"', 'name = ""'))], 1,
+     "[axis] name"),
+    ("axis-no-structure", lambda t, s: ["modes", axis(t, s, drop=["structure"])], 1,
+     "[structure]"),
+    ("axis-structure-file-missing", lambda t, s: ["modes", axis(t, s, sub(
+        'file = "structure.npz"', 'file = "missing.npz"'))], 1, "missing.npz"),
+    ("axis-misspelt-key", lambda t, s: ["modes", axis(t, s, sub(
+        "torque_constant = 1.2", "torque_konstant = 1.2"))], 1, "torque_konstant"),
+    ("axis-negative-torque-constant", lambda t, s: ["modes", axis(t, s, sub(
+        "torque_constant = 1.2", "torque_constant = -1.2"))], 1, "torque_constant"),
+    ("axis-text-for-number", lambda t, s: ["modes", axis(t, s, sub(
+        "resistance = 0.4", 'resistance = "0.4 ohm"'))], 1, "resistance"),
+    ("axis-nan", lambda t, s: ["modes", axis(t, s, sub(
+        "resistance = 0.4", "resistance = nan"))], 1, "resistance"),
+    ("axis-inf", lambda t, s: ["modes", axis(t, s, sub(
+        "inductance = 3.0e-3", "inductance = inf"))], 1, "inductance"),
+    ("axis-unknown-pad-dof", lambda t, s: ["modes", axis(t, s, sub(
+        'pads = ["pad1.x", "pad2.x"]', 'pads = ["pad1.x", "pad7.x"]'))], 1, "pad7.x"),
+    ("axis-unknown-rotor-dof", lambda t, s: ["modes", axis(t, s, sub(
+        'rotor = "motor.rotor"', 'rotor = "spindle"'))], 1, "spindle"),
+    ("axis-unknown-lugre-set", lambda t, s: ["modes", axis(t, s, lambda text: re.sub(
+        r"\[friction\.lugre\].*?(?=\[drive\])", "", text, flags=re.S).replace(
+        'pads = ["pad1.x", "pad2.x"]', 'pads = ["pad1.x", "pad2.x"]\nlugre = "teflon"'))], 1,
+     "lugre"),
+    ("axis-lugre-energy", lambda t, s: ["modes", axis(t, s, sub(
+        "sigma1 = 1.6e7 ", "sigma1 = -1.6e7 "))], 1, "sigma1"),
+    ("axis-lugre-fc-above-fs", lambda t, s: ["modes", axis(t, s, sub(
+        "fc = 2198.0 ", "fc = 7000.0 "))], 1, "fc"),
+    ("axis-negative-modal-damping", lambda t, s: ["modes", axis(t, s, sub(
+        "modal_damping = 0.03", "modal_damping = -0.03"))], 1, "modal_damping"),
+    ("axis-two-kv", lambda t, s: ["modes", axis(t, s, sub(
+        "kv_m_per_min_per_mm = 1.0 ", "kv = 16.7\nkv_m_per_min_per_mm = 1.0 "))], 1, "kv"),
+    ("axis-immersion", lambda t, s: ["modes", axis(t, s, sub(
+        "radial_immersion = 0.5", "radial_immersion = 50.0"))], 1, "radial_immersion"),
+    ("axis-zero-teeth", lambda t, s: ["modes", axis(t, s, sub("teeth = 4", "teeth = 0"))], 1,
+     "teeth"),
+    ("axis-milling-mode", lambda t, s: ["modes", axis(t, s, sub(
+        'milling = "down"', 'milling = "sideways"'))], 1, "milling"),
+    ("axis-speed-range-reversed", lambda t, s: ["modes", axis(t, s, sub(
+        "speed_rpm = [3000.0, 12000.0]", "speed_rpm = [12000.0, 3000.0]"))], 1, "speed_rpm"),
+    ("axis-band-reversed", lambda t, s: ["modes", axis(t, s, sub(
+        "band_hz = [5.0, 300.0]", "band_hz = [300.0, 5.0]"))], 1, "band"),
+    ("axis-ms-below-one", lambda t, s: ["modes", axis(t, s, sub(
+        "ms_position_max = 1.5", "ms_position_max = 0.9"))], 1, "ms_position_max"),
+    ("axis-chatter-weight", lambda t, s: ["modes", axis(t, s, sub(
+        "chatter_weight = 0.0", "chatter_weight = 2.0"))], 1, "chatter_weight"),
+    ("axis-free-unknown", lambda t, s: ["modes", axis(t, s, sub(
+        'free = ["c", "kv", "kp", "ti"]', 'free = ["zz"]'))], 1, "free"),
+    ("axis-unknown-subtable", lambda t, s: ["modes", axis(t, s, lambda x: x
+                                                          + "\n[friction.extra]\nx = 1\n")],
+     1, "extra"),
+    pytest.param("axis-kt-1e300", lambda t, s: ["lobes", axis(t, s, sub(
+        "kt = 2.0e9", "kt = 1.0e300"))], 1, "kt"),
+    pytest.param("axis-mass-1e300", lambda t, s: ["modes", _heavy(t, s)], 1, "mass",
+                 ),
+    pytest.param("axis-resistance-1e300", lambda t, s: ["bode", axis(t, s, sub(
+        "resistance = 0.4", "resistance = 1.0e300"))], 1, "resistance",
+                 ),
+
+    # ---- sections a command needs
+    ("lobes-without-cutting", lambda t, s: ["lobes", axis(t, s, drop=["cutting"])], 1,
+     "[cutting]"),
+    ("bode-without-drive", lambda t, s: ["bode", axis(t, s, drop=["drive"])], 1, "[drive]"),
+    ("table3-without-friction", lambda t, s: ["table3", axis(t, s, drop=["friction"])], 1,
+     "[friction]"),
+    ("table3-without-drive", lambda t, s: ["table3", axis(t, s, drop=["drive"])], 1, "[drive]"),
+    ("modes-locked-pads-without-friction", lambda t, s: [
+        "modes", axis(t, s, drop=["friction"]), "--pads", "locked"], 1, "[friction]"),
+    ("compliance-stiction-without-friction", lambda t, s: [
+        "compliance", axis(t, s, drop=["friction"]), "--contact", "stiction"], 1,
+     "[friction]"),
+    ("tune-without-friction", lambda t, s: [
+        "tune", axis(t, s, drop=["friction"]), "--no-simulation"], 1, "[friction]"),
+    pytest.param("tune-without-drive", lambda t, s: [
+        "tune", axis(t, s, drop=["drive"]), "--no-simulation"], 1, "[drive]",
+                 ),
+
+    # ---- structure files (`check`)
+    ("check-missing-file", lambda t, s: ["check", str(t / "M.mtx"), str(t / "K.mtx")], 1,
+     "M.mtx"),
+    ("check-unknown-suffix", lambda t, s: ["check", text_file(t, "M.txt", "1"),
+                                           text_file(t, "K.txt", "1")], 1, ".txt"),
+    ("check-mtx-without-stiffness", lambda t, s: ["check", mtx(t, "M.mtx", np.eye(2))], 1,
+     "stiffness"),
+    ("check-corrupt-mtx", lambda t, s: ["check", text_file(t, "M.mtx", "%%MatrixMarket junk\n"),
+                                        mtx(t, "K.mtx", np.eye(2))], 1, "M.mtx"),
+    ("check-sizes-differ", lambda t, s: ["check", mtx(t, "M.mtx", np.eye(2)),
+                                         mtx(t, "K.mtx", np.eye(3))], 1, "K.mtx"),
+    ("check-not-square", lambda t, s: ["check", mtx(t, "M.mtx", np.ones((2, 3))),
+                                       mtx(t, "K.mtx", np.eye(2))], 1, "M.mtx"),
+    ("check-npz-without-stiffness", lambda t, s: ["check", npz(t, mass=np.eye(2))], 1,
+     "stiffness"),
+    ("check-three-files", lambda t, s: ["check", *[mtx(t, f"{n}.mtx", np.eye(2))
+                                                   for n in "MKX"]], 1, "at most two"),
+    ("check-dof-map-length", lambda t, s: [
+        "check", mtx(t, "M.mtx", spring_mass()[0]), mtx(t, "K.mtx", spring_mass()[1]),
+        "--dof-map", text_file(t, "dofs.csv", "name\na.x\nb.x\n")], 1, "dofs.csv"),
+    ("check-unknown-boundary", lambda t, s: [
+        "check", mtx(t, "M.mtx", spring_mass()[0]), mtx(t, "K.mtx", spring_mass()[1]),
+        "--dof-map", text_file(t, "dofs.csv", "name\na.x\nb.x\nc.x\n"), "--boundary", "z.x"],
+     1, "z.x"),
+    ("check-modes-and-cutoff", lambda t, s: [
+        "check", mtx(t, "M.mtx", spring_mass()[0]), mtx(t, "K.mtx", spring_mass()[1]),
+        "--boundary", "0", "--n-modes", "2", "--f-max-hz", "100"], 1, "--f-max-hz"),
+    ("check-nan-in-matrix", lambda t, s: ["check", npz(t, mass=np.array([[np.nan, 0], [0, 1.]]),
+                                                       stiffness=np.eye(2))], 1, "NaN"),
+    ("check-f-max-zero", lambda t, s: ["check", str(PAPER), "--f-max-hz", "0"], 2,
+     "--f-max-hz"),
+    ("check-n-modes-negative", lambda t, s: ["check", str(PAPER), "--n-modes", "-1"], 2,
+     "--n-modes"),
+
+    # ---- CSV files
+    ("fit-wrong-header", lambda t, s: ["friction", "fit", stribeck_csv(
+        t, header="speed,torque")], 1, "v_m_per_s,f_n"),
+    ("fit-non-number", lambda t, s: ["friction", "fit", stribeck_csv(
+        t, rows=[("0.1", "abc")] * 20)], 1, "f_n"),
+    ("fit-too-few-points", lambda t, s: ["friction", "fit", stribeck_csv(
+        t, rows=[(0.001, 3000.0), (-0.002, -2800.0)])], 1, "at least"),
+    ("fit-one-sign", lambda t, s: ["friction", "fit", stribeck_csv(
+        t, rows=[(float(v), 2000.0 + 5000.0 * v) for v in np.geomspace(1e-4, 0.5, 30)])], 1,
+     "one sign"),
+    ("fit-empty-file", lambda t, s: ["friction", "fit", text_file(t, "empty.csv", "")], 1,
+     "empty.csv"),
+    ("fit-missing-file", lambda t, s: ["friction", "fit", str(t / "nothing.csv")], 1,
+     "nothing.csv"),
+    ("fit-fix-unknown-name", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix",
+                                           "mu=0.1"], 1, "mu"),
+    ("fit-fix-nan", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix", "delta=nan"],
+     1, "finite"),
+    ("fit-fix-without-value", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix",
+                                            "delta"], 1, "NAME=VALUE"),
+    ("frf-missing-file", lambda t, s: ["lobes", "--frf", str(t / "frf.csv")], 1, "frf.csv"),
+    ("frf-wrong-header", lambda t, s: ["lobes", "--frf", frf_csv(
+        t, "f,re,im\n1,2,3\n2,3,4\n3,4,5\n4,5,6\n")], 1, "f_hz"),
+    ("frf-nan", lambda t, s: ["lobes", "--frf", frf_csv(
+        t, "f_hz,re_xx_m_per_n,im_xx_m_per_n\n100,nan,1e-7\n200,1e-7,-1e-7\n"
+           "300,1e-8,-1e-8\n")], 1, "frf.csv"),
+    ("coordinates-bad-csv", lambda t, s: ["check", str(PAPER), "--coordinates", text_file(
+        t, "xyz.csv", "node,x\n1,abc\n")], 1, "xyz.csv"),
+
+    # ---- flags
+    ("modes-count-negative", lambda t, s: ["modes", str(PAPER), "--count", "-3"], 2,
+     "--count"),
+    ("modes-count-zero", lambda t, s: ["modes", str(PAPER), "--count", "0"], 2, "--count"),
+    ("modes-pads-unknown", lambda t, s: ["modes", str(PAPER), "--pads", "glued"], 2, "--pads"),
+    ("twomass-alpha-negative", lambda t, s: ["twomass", "--alpha", "-1"], 2, "--alpha"),
+    ("twomass-k-zero", lambda t, s: ["twomass", "--k", "0"], 2, "--k"),
+    ("twomass-m1-nan", lambda t, s: ["twomass", "--m1", "nan"], 2, "--m1"),
+    ("twomass-m1-inf", lambda t, s: ["twomass", "--m1", "inf"], 2, "--m1"),
+    ("twomass-m1-text", lambda t, s: ["twomass", "--m1", "heavy"], 2, "--m1"),
+    ("twomass-layout", lambda t, s: ["twomass", "--layout", "C"], 2, "--layout"),
+    ("friction-amplitude", lambda t, s: ["friction", "--amplitude=-1e-6"], 2, "--amplitude"),
+    ("friction-frequency", lambda t, s: ["friction", "--frequency-hz", "0"], 2,
+     "--frequency-hz"),
+    ("friction-params", lambda t, s: ["friction", "--params", "teflon"], 2, "--params"),
+    ("lobes-teeth", lambda t, s: ["lobes", *MODE, "--teeth", "0"], 2, "--teeth"),
+    ("lobes-immersion", lambda t, s: ["lobes", *MODE, "--immersion", "1.5"], 2, "--immersion"),
+    ("lobes-speeds", lambda t, s: ["lobes", *MODE, "--speeds", "1"], 2, "--speeds"),
+    ("lobes-mode-stiffness", lambda t, s: ["lobes", "--mode", "922", "0.02", "-5"], 2,
+     "K_N_PER_M"),
+    ("lobes-mode-text", lambda t, s: ["lobes", "--mode", "922", "abc", "1e6"], 2, "ZETA"),
+    ("lobes-speed-range", lambda t, s: ["lobes", *MODE, "--speed-rpm", "9000", "5000"], 1,
+     "--speed-rpm"),
+    ("lobes-intervals", lambda t, s: ["lobes", *MODE, "--intervals", "2"], 2, "--intervals"),
+    ("lobes-no-compliance", lambda t, s: ["lobes"], 1, "give the compliance"),
+    ("lobes-two-sources", lambda t, s: ["lobes", str(PAPER), *MODE], 1, "one source"),
+    ("table3-workers", lambda t, s: ["table3", "--workers", "0"], 2, "--workers"),
+    ("table3-duration-zero", lambda t, s: ["table3", "--duration", "0"], 2, "--duration"),
+    ("table3-duration-negative", lambda t, s: ["table3", "--duration", "-5"], 2, "--duration"),
+    ("table3-sweep-reversed", lambda t, s: ["table3", "--f-start-hz", "100", "--f-end-hz",
+                                            "10"], 1, "--f-start-hz"),
+    ("compliance-c-negative", lambda t, s: ["compliance", str(PAPER), "--c", "-5"], 2, "--c"),
+    ("compliance-amplitude-huge", lambda t, s: ["compliance", str(PAPER), "--amplitude", "1"],
+     2, "--amplitude"),
+    ("compliance-equivalent-needs-amplitude", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "equivalent"], 1, "amplitude"),
+    ("compliance-c-without-viscous", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "locked", "--c", "1e5"], 1, "--c"),
+    ("bode-contact-unknown", lambda t, s: ["bode", str(PAPER), "--contact", "glue"], 2,
+     "--contact"),
+    pytest.param("tune-starts-zero", lambda t, s: ["tune", str(PAPER), "--starts", "0"], 2,
+                 "--starts"),
+    pytest.param("tune-starts-negative", lambda t, s: ["tune", str(PAPER), "--starts", "-5"], 2,
+                 "--starts"),
+    ("tune-free-unknown", lambda t, s: ["tune", str(PAPER), "--free", "xyz"], 2, "--free"),
+    ("verify-missing-file", lambda t, s: ["verify", str(t / "results.json")], 1,
+     "results.json"),
+    ("verify-not-json", lambda t, s: ["verify", text_file(t, "r.json", "{not json")], 1,
+     "not valid JSON"),
+    ("verify-no-design", lambda t, s: ["verify", text_file(t, "r.json", json.dumps(
+        {"axis": str(PAPER)}))], 1, "'design'"),
+    ("verify-negative-c", lambda t, s: ["verify", text_file(t, "r.json", json.dumps(
+        {"axis": str(PAPER), "design": {"c": -1.0}}))], 1, "design.c"),
+    ("unknown-command", lambda t, s: ["tuning", str(PAPER)], 2, "invalid choice"),
+    ("no-command", lambda t, s: [], 2, "COMMAND"),
+
+    # ---- output folders
+    ("out-is-a-file", lambda t, s: ["twomass", "--out", text_file(t, "o.txt", "x")], 1,
+     "o.txt is a file"),
+    ("out-under-a-file", lambda t, s: ["bode", str(PAPER), "--out", str(Path(text_file(
+        t, "o.txt", "x")) / "sub")], 1, "o.txt is a file"),
+    ("out-foreign-file", lambda t, s: ["modes", str(PAPER), "--out", _foreign(
+        t, "modes_paper_x_axis")], 1, "notes.txt"),
+    ("out-run-folder-is-a-file", lambda t, s: ["friction", "--out", _blocked(
+        t, "friction_bianchi2014")], 1, "friction_bianchi2014"),
+    ("init-into-a-file", lambda t, s: ["init", text_file(t, "axis.toml", "x")], 1,
+     "is a file"),
+    ("init-under-a-file", lambda t, s: ["init", str(Path(text_file(t, "f", "x")) / "a")], 1,
+     "is a file"),
+    ("init-existing-axis", lambda t, s: ["init", _copy(t, s)], 1, "--force"),
+]
+
+
+def _heavy(tmp, starter) -> str:
+    folder = Path(axis(tmp, starter, sub("modal_damping = 0.03", "modal_damping = 0.02")))
+    data = np.load(folder / "structure.npz")
+    np.savez(folder / "structure.npz", mass=data["mass"] * 1e300, stiffness=data["stiffness"],
+             dofs=data["dofs"])
+    return str(folder)
+
+
+def _foreign(tmp, name) -> str:
+    (tmp / "out" / name).mkdir(parents=True)
+    (tmp / "out" / name / "notes.txt").write_text("mine")
+    return str(tmp / "out")
+
+
+def _blocked(tmp, name) -> str:
+    (tmp / "out").mkdir()
+    (tmp / "out" / name).write_text("in the way")
+    return str(tmp / "out")
+
+
+def _copy(tmp, starter) -> str:
+    shutil.copytree(starter, tmp / "mine")
+    return str(tmp / "mine")
+
+
+def _files(folder: Path) -> dict:
+    return {p: p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _case_id(case):
+    return case.values[0] if hasattr(case, "values") else case[0]
+
+
+def test_the_catalogue_is_large_and_covers_every_command():
+    from servotune.cli import COMMANDS
+
+    assert len(CASES) >= 60
+    names = {_case_id(c) for c in CASES}
+    assert len(names) == len(CASES)
+    first_words = set()
+    for case in CASES:
+        fixture = case.values[1] if hasattr(case, "values") else case[1]
+        code = fixture.__code__.co_consts
+        first_words |= {c for c in code if isinstance(c, str) and c in COMMANDS}
+    assert first_words >= set(COMMANDS) - {"nlcompliance"}
+
+
+@pytest.mark.parametrize("case_id, fixture, status, words", CASES,
+                         ids=[_case_id(c) for c in CASES])
+def test_bad_input_is_a_clear_error_and_writes_nothing(case_id, fixture, status, words,
+                                                       starter, tmp_path, monkeypatch, capsys):
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)  # a default ./out would land here and be seen
+    argv = fixture(tmp_path, starter)
+    if argv and argv[0] not in ("init",) and "--out" not in argv and argv[0] in (
+            "twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "table3"):
+        argv = [*argv, "--out", str(tmp_path / "out")]
+    before = _files(tmp_path)
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == status, err
+    assert words in err, err
+    assert "Traceback" not in err and "internal error" not in err, err
+    assert _files(tmp_path) == before
