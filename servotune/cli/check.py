@@ -1,69 +1,158 @@
-"""``servotune check``: read FE or reduced matrices, check them and print the report."""
+"""``servotune check``: read FE or reduced matrices, check them and print the report.
+
+With ``--boundary`` the matrices are reduced by Craig-Bampton first and the reduced model is
+checked against the full one over the band (``--band-hz``): frequencies, port compliance and
+the coverage of the band by the kept fixed-interface modes. Given an axis folder, its structure
+is checked, against its FE matrices when it reduces them on loading, and its transmission
+against the drive.
+"""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..axis import load_axis
+from ..model_checks import transmission_check
 from ..structure import io
-from ..structure.reduction import cb_check, craig_bampton
+from ..structure.cbcheck import cb_check
+from ..structure.coverage import DEFAULT_MARGIN, mode_coverage
+from ..structure.reduction import craig_bampton
+from ..structure.reduction_check import reduction_check
 from ._common import add_output_options, print_json
 
 __all__ = ["add_parser", "run"]
 
 DENSE_LIMIT = 5000
+TWO_PI = 2.0 * math.pi
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "check", help="check mass/stiffness matrices (symmetry, definiteness, rigid-body "
-                      "mass, fixed-base frequencies, modal effective mass)",
+                      "mass, fixed-base frequencies, modal effective mass) and a reduction "
+                      "against the full model",
         description="Read mass and stiffness matrices (.npz, .mtx/.mmf MatrixMarket, "
-                    "Harwell-Boeing .hb/.rsa/.rua/.hbmat, MATLAB .mat) or an axis folder, "
-                    "check them, optionally reduce them by Craig-Bampton first, and print the "
-                    "check report.")
+                    "Harwell-Boeing .hb/.rsa/.rua/.hbmat, MATLAB .mat, Nastran .op4) or an "
+                    "axis folder, check them, optionally reduce them by Craig-Bampton first "
+                    "and check the reduced model against the full one over the band "
+                    "(frequencies, port compliance, fixed-interface modes covering the band "
+                    "with a margin). Exit status 1 when a check fails.")
     p.add_argument("matrices", nargs="+", type=Path,
-                   help="MASS [STIFFNESS] files (one .npz/.mat may hold both), or an axis "
+                   help="MASS [STIFFNESS] files (one .npz/.mat/.op4 may hold both), or an axis "
                         "folder")
     p.add_argument("--dof-map", type=Path, help="CSV naming the DOFs (name, or node,dof)")
+    p.add_argument("--ports", type=Path,
+                   help="CSV naming ports from node numbers (port,node,direction) or positions "
+                        "(port,x,y,z,direction; needs --coordinates)")
     p.add_argument("--boundary", nargs="+", metavar="DOF",
                    help="reduce by Craig-Bampton to these boundary DOFs first")
-    p.add_argument("--n-modes", type=int, help="fixed-interface modes to keep (default 20)")
+    p.add_argument("--n-modes", type=int, help="fixed-interface modes to keep (default: every "
+                                               "mode up to --margin times the band's top)")
     p.add_argument("--f-max-hz", type=float, help="keep fixed-interface modes up to this "
                                                   "frequency instead")
+    p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="band of interest [Hz] for the reduction check (default 5 300, or the "
+                        "axis' [requirements] band_hz)")
+    p.add_argument("--margin", type=float, default=DEFAULT_MARGIN,
+                   help="the kept fixed-interface modes must reach MARGIN times the band's top "
+                        f"(default {DEFAULT_MARGIN:g})")
     p.add_argument("--coordinates", type=Path,
                    help="CSV node,x,y,z [m] for geometric rigid-body mass and centre of "
-                        "gravity (DOFs named <node>.<x|y|z|rx|ry|rz>)")
+                        "gravity (DOFs named <node>.<x|y|z|rx|ry|rz>) and ports by position")
     add_output_options(p, default_out=None)
     p.set_defaults(func=run)
 
 
+def _band(args, axis=None):
+    if args.band_hz is not None:
+        lo, hi = args.band_hz
+        if not 0 < lo < hi:
+            raise ValueError(f"--band-hz needs 0 < LOW < HIGH, got {lo:g} {hi:g}")
+        return (TWO_PI * lo, TWO_PI * hi)
+    if axis is not None:
+        return axis.requirements.band
+    return (TWO_PI * 5.0, TWO_PI * 300.0)
+
+
+def _check_axis(args, coords):
+    axis = load_axis(args.matrices[0])
+    band = _band(args, axis)
+    model = axis.structure
+    out = {"check": cb_check(model, coordinates=coords), "transmission": None,
+           "reduction": None, "coverage": mode_coverage(model, band, args.margin)}
+    if axis.drive is not None:
+        out["transmission"] = transmission_check(model, axis.drive)
+    table = axis.tables.get("structure", {})
+    if "reduce" in table:  # FE matrices reduced on loading: check against them
+        data = io.read_structure(axis.path / table["mass"], axis.path / table["stiffness"],
+                                 axis.path / table["dof_map"] if "dof_map" in table else None)
+        boundary = list(table["reduce"]["boundary"])
+        zeta = model.damping_ratio
+        zeta = float(zeta[0]) if zeta is not None and len(set(zeta.tolist())) == 1 else 0.03
+        out["reduction"] = reduction_check(data.mass, data.stiffness, data.index(boundary),
+                                           model, band, margin=args.margin,
+                                           damping_ratio=zeta, coordinates=coords)
+    return str(args.matrices[0]), out
+
+
 def run(args) -> int:
     coords = io.read_coordinates(args.coordinates) if args.coordinates else None
+    if args.margin < 1.0 or not math.isfinite(args.margin):
+        raise ValueError(f"--margin must be >= 1, got {args.margin:g}")
     if len(args.matrices) == 1 and args.matrices[0].is_dir():
-        model = load_axis(args.matrices[0]).structure
-        check = cb_check(model, coordinates=coords)
-        source = str(args.matrices[0])
+        source, out = _check_axis(args, coords)
     else:
         if len(args.matrices) > 2:
             raise ValueError("give MASS [STIFFNESS]: at most two matrix files")
         stiffness = args.matrices[1] if len(args.matrices) == 2 else None
-        data = io.read_structure(args.matrices[0], stiffness, args.dof_map)
+        data = io.read_structure(args.matrices[0], stiffness, args.dof_map, ports=args.ports,
+                                 coordinates=coords)
         source = data.source
+        out = {"check": None, "transmission": None, "reduction": None, "coverage": None}
         if args.boundary:
-            n_modes = args.n_modes if args.n_modes is not None or args.f_max_hz else 20
+            band = _band(args)
+            f_max = args.f_max_hz
+            if args.n_modes is None and f_max is None:
+                f_max = args.margin * band[1] / TWO_PI  # cover the band by default
             model = craig_bampton(data.mass, data.stiffness, data.index(args.boundary),
-                                  n_modes=n_modes, f_max_hz=args.f_max_hz,
+                                  n_modes=args.n_modes, f_max_hz=f_max,
                                   boundary_names=args.boundary)
-            check = cb_check(model, coordinates=coords)
+            out["check"] = cb_check(model, coordinates=coords)
+            out["reduction"] = reduction_check(data.mass, data.stiffness,
+                                               data.index(args.boundary), model, band,
+                                               margin=args.margin, coordinates=coords)
         elif data.n <= DENSE_LIMIT:
-            check = cb_check(data.mass, data.stiffness, data.dofs, coordinates=coords)
+            out["check"] = cb_check(data.mass, data.stiffness, data.dofs, coordinates=coords)
         else:
             raise ValueError(f"{source}: {data.n} DOFs; give --boundary DOF ... (and "
                              "--n-modes or --f-max-hz) to reduce before the check")
+    parts = [out["check"], out["transmission"], out["reduction"]]
+    passed = all(p.passed for p in parts if p is not None)
+    if out["reduction"] is None and out["coverage"] is not None:
+        passed = passed and out["coverage"].covered
     if args.json:
-        print_json({"source": source, **check.to_dict()})
+        result = {"source": source, **out["check"].to_dict()}
+        result["model_check_passed"] = out["check"].passed
+        if out["reduction"] is not None:
+            result["reduction_check"] = out["reduction"].to_dict()
+        if out["coverage"] is not None:
+            result["band_coverage"] = out["coverage"].to_dict()
+        elif out["reduction"] is not None:
+            result["band_coverage"] = out["reduction"].coverage.to_dict()
+        if out["transmission"] is not None:
+            result["transmission"] = out["transmission"].to_dict()
+        result["passed"] = passed
+        print_json(result)
     else:
         print(f"{source}:")
-        print(check)
-    return 0 if check.passed else 1
+        print(out["check"])
+        if out["reduction"] is not None:
+            print(out["reduction"])
+        elif out["coverage"] is not None:
+            print(f"band coverage: {out['coverage'].message}")
+        if out["transmission"] is not None:
+            t = out["transmission"]
+            print(f"transmission: {'ok' if t.passed else 'FAILED'}: {t.message}")
+        print(f"overall: {'passed' if passed else 'FAILED'}")
+    return 0 if passed else 1

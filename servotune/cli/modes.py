@@ -4,13 +4,21 @@ The share (``wp_x_participation``) of mode j is its part of the static complianc
 work-piece X DOF: phi_j(wp.x)^2 / omega_j^2 over the sum of the same for every flexible mode
 (phi mass-normalised). The shares add up to 1; rigid-body modes get 0. The mode with the
 largest share is the one that moves the work piece in X.
+
+When the structure is a reduced model whose kept fixed-interface modes do not cover the
+requirements' band with the margin (``servotune.model_checks.band_coverage``), a warning that
+names the band, the frequency reached and the fix goes to standard error (and into the JSON
+under ``warnings``): the modes and the compliance near the top of the band are then not
+reliable.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 
 from ..axis import load_axis
+from ..model_checks import band_coverage
 from ._common import add_output_options, print_json
 
 __all__ = ["add_parser", "run"]
@@ -41,6 +49,10 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     axis = load_axis(args.axis)
+    coverage = band_coverage(axis.structure, axis.requirements)
+    warnings = [] if coverage.covered else [f"band coverage: {coverage.message}"]
+    for text in warnings:
+        print(f"WARNING: {text}", file=sys.stderr)
     model = axis.configuration(pads=args.pads, motor=args.motor)
     omega = model.natural_frequencies()
     zeta = model.modal_damping_ratios()
@@ -61,6 +73,8 @@ def run(args) -> int:
         "rigid_body_modes": rigid,
         "wp_x_peak_compliance": None if peak is None else peak["wp_x_peak_compliance"],
         "wp_x_peak_hz": None if peak is None else peak["wp_x_peak_hz"],
+        "band_coverage": coverage.to_dict(),
+        "warnings": warnings,
     }
     if args.json:
         print_json(result)
@@ -76,6 +90,9 @@ def run(args) -> int:
     print(f"  work-piece X mode: {omega[j] * HZ:.2f} Hz ({100 * share[j]:.1f} % of the static "
           "compliance at wp.x)")
     if peak is not None:
+        lo, hi = band[0] * HZ, band[1] * HZ
         print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
-              f"{peak['wp_x_peak_hz']:.2f} Hz ({band[0]:g}-{band[1]:g} Hz)")
+              f"{peak['wp_x_peak_hz']:.2f} Hz ({lo:g}-{hi:g} Hz)")
+    if coverage.reduced:
+        print(f"  {'WARNING: ' if not coverage.covered else ''}{coverage.message}")
     return 0
