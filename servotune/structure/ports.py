@@ -205,12 +205,14 @@ def name_ports(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> tuple[
     dofs = [str(d) for d in dofs]
     lookup: dict[tuple[str, str], int] = {}
     by_node: dict[str, list[str]] = {}
+    labels: dict[str, list[str]] = {}  # the export's own spelling, for messages
     for row, dof in enumerate(dofs):
         node, direction = _split(dof)
         if direction is None:
             continue
         lookup.setdefault((node, direction), row)
         by_node.setdefault(node, []).append(direction)
+        labels.setdefault(node, []).append(dof.rpartition(".")[2])
     coords = None
     if coordinates is not None:
         coords = {normalise_node(k): np.asarray(v, dtype=float)
@@ -234,7 +236,7 @@ def name_ports(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> tuple[
         row = lookup.get((node, port.direction))
         if row is None:
             raise PortError(f"port {port.name!r}: node {node} has no {port.direction} DOF in "
-                            f"the DOF map (it has {', '.join(by_node[node])}); choose one of "
+                            f"the DOF map (it has {', '.join(labels[node])}); choose one of "
                             "those or another node")
         if row in taken:
             raise PortError(f"ports {taken[row]!r} and {port.name!r} are the same DOF "

@@ -188,6 +188,10 @@ def _fixed_interface_modes(k_ii, m_ii, factor, n_modes, f_max_hz, verify):
     if np.any(w2 <= 0):
         raise ValueError("a fixed-interface eigenvalue is <= 0: K_ii is not positive definite "
                          "(check the signs of the stiffness export)")
+    if w2.size and w2[0] < 1e-12 * max(w2[-1], modes.next_eigenvalue if
+                                       math.isfinite(modes.next_eigenvalue) else 0.0):
+        f0 = math.sqrt(w2[0]) / _TWO_PI
+        raise ValueError(_MECHANISM + f" (a fixed-interface mode at {f0:.3g} Hz, nearly zero)")
     method = modes.method
     complete = modes.complete_below
     if f_max_hz is not None and method != "lanczos-unchecked":

@@ -67,6 +67,8 @@ DENSE_MAX = 1500
 #: Above DENSE_MAX and up to DENSE_LIMIT, dense when at least this share of the modes is wanted.
 DENSE_FRACTION = 0.1
 DENSE_LIMIT = 8000
+#: Above this size the pivots of a factorisation are not checked (see _SuperLUFactor).
+PIVOT_CHECK_MAX = 20000
 #: Restarts with deflation after a failed check before giving up.
 MAX_RESTARTS = 20
 _SEED = 20140101  # start vectors are reproducible
@@ -99,6 +101,11 @@ class _SuperLUFactor:
             lu = _superlu(self._a)
         except RuntimeError as exc:
             raise ValueError(self._mechanism) from exc
+        if self._a.shape[0] > PIVOT_CHECK_MAX:
+            # scipy hands out U only as a full copy (a third of the factors' memory): on large
+            # models an indefinite or nearly singular matrix shows in the eigenvalues instead
+            self._lu = lu
+            return
         pivots = lu.U.diagonal()
         scale = np.abs(pivots).max() if pivots.size else 1.0
         if np.any(pivots < -1e-13 * scale):
