@@ -368,9 +368,9 @@ class ModalModel:
     def receptance(self, omega, inputs, outputs) -> np.ndarray:
         """Displacement per force X/F(j omega) between named DOFs by direct solution.
 
-        Solves (K - w^2 M + j w D) X = F at every frequency (batched dense solves: a cost of
-        n^3 per frequency; :meth:`port_receptance` gives the same from the modes at a cost
-        linear in the number of modes, the way to go for models of more than a few dozen DOFs).
+        Solves (K - w^2 M + j w D) X = F at every frequency (a cost of n^3 per frequency;
+        :meth:`port_receptance` gives the same from the modes at a cost linear in the number
+        of modes, the way to go for models of more than a few dozen DOFs).
 
         Returns an array of shape (len(omega), len(outputs), len(inputs)) [m/N, ...].
         """
@@ -379,12 +379,9 @@ class ModalModel:
         rhs = np.zeros((self.n, len(i_in)))
         rhs[i_in, np.arange(len(i_in))] = 1.0
         out = np.empty((omega.size, len(i_out), len(i_in)), dtype=complex)
-        chunk = max(1, 4_000_000 // (self.n * self.n))  # bounded memory per batch
-        for i in range(0, omega.size, chunk):
-            w = omega[i:i + chunk, None, None]
+        for j, w in enumerate(omega):
             dyn = self.stiffness - w * w * self.mass + 1j * w * self.damping
-            out[i:i + chunk] = np.linalg.solve(dyn, np.broadcast_to(
-                rhs, (w.shape[0], *rhs.shape)))[:, i_out]
+            out[j] = np.linalg.solve(dyn, rhs)[i_out]
         return out
 
     def _modal_damping_diagonal(self):

@@ -68,7 +68,7 @@ DENSE_MAX = 1500
 DENSE_FRACTION = 0.1
 DENSE_LIMIT = 8000
 #: Above this size the pivots of a factorisation are not checked (see _SuperLUFactor).
-PIVOT_CHECK_MAX = 20000
+PIVOT_CHECK_MAX = DENSE_MAX
 #: Restarts with deflation after a failed check before giving up.
 MAX_RESTARTS = 20
 _SEED = 20140101  # start vectors are reproducible
@@ -494,11 +494,10 @@ def lowest_modes(k, m, *, count: int | None = None, below: float | None = None,
             w, phi = _rayleigh_ritz(k, m, q)
             w, phi = w[:max(want, count)], phi[:, :max(want, count)]
             probe = min(size, n - w.size - 1)
-        if w.size > count:
-            complete = min(complete, float(w[count])) if complete > -math.inf \
-                else float(w[count])
     else:
         complete = float(w[count - 1])
+    if w.size > count:  # the returned modes are the first count: the next one is left out
+        complete = min(complete, float(w[count])) if complete > -math.inf else float(w[count])
     nxt = float(w[count]) if w.size > count else math.nan
     method = "lanczos" if verify != "none" else "lanczos-unchecked"
     return Modes(w[:count], phi[:, :count], method, complete, nxt, restarts)
