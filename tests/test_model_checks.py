@@ -86,7 +86,7 @@ def test_an_encoder_the_motor_does_not_move_is_undetermined():
 
 
 def test_unknown_dofs_are_clear_errors():
-    with pytest.raises(KeyError, match="encoder.y"):
+    with pytest.raises(KeyError, match=r"encoder\.y"):
         transmission_check(small_axis(), replace(small_drive(), encoder="encoder.y"))
 
 

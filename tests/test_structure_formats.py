@@ -165,5 +165,5 @@ def test_ports_file_format_errors(tmp_path):
     with pytest.raises(PortError, match="needs the columns port, direction and node"):
         read_ports(tmp_path / "p.csv")
     (tmp_path / "q.csv").write_text("port,node,x,y,z,direction\nwp.x,,a,b,c,x\n")
-    with pytest.raises(PortError, match="line 2: port 'wp.x' has neither"):
+    with pytest.raises(PortError, match=r"line 2: port 'wp\.x' has neither"):
         read_ports(tmp_path / "q.csv")
