@@ -278,6 +278,11 @@ def test_check_command_reduces_and_reports(tmp_path, capsys):
     n, k = chain_files(tmp_path)
     argv = ["check", str(tmp_path / "m.mtx"), str(tmp_path / "k.mtx"), "--dof-map",
             str(tmp_path / "dofs.csv"), "--boundary", f"m{n - 1}.x", "--n-modes", "4"]
+    # 4 fixed-interface modes reach 46.8 Hz (the 5th is at 58.4 Hz): not enough for the default
+    # band 5-300 Hz, enough for 1-30 Hz with the margin 1.5 (45 Hz)
+    assert main([*argv, "--json"]) == 1
+    assert json.loads(capsys.readouterr().out)["band_coverage"]["covered"] is False
+    argv += ["--band-hz", "1", "30"]
     assert main([*argv, "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     # fixed-interface modes: the chain held at both ends, f_j = sqrt(k/m) sin(j pi/(2n)) / pi

@@ -98,3 +98,39 @@ def test_unknown_dof_names_the_known_ones():
         ModalModel(np.eye(2), np.eye(2), ["a", "a"])
     with pytest.raises(ValueError, match="damping_ratio"):
         ModalModel(np.eye(2), np.eye(2), ["a", "b"], damping_ratio=-0.1)
+
+
+# -- port receptance: modes and a port-sized solve against the direct solution --------------------
+def random_model(n=40, seed=5, zeta=0.02):
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal((n, n))
+    k = a @ a.T + n * np.eye(n)
+    m = np.diag(rng.uniform(1.0, 2.0, n))
+    return ModalModel(m, k, [f"d{i}" for i in range(n)], damping_ratio=zeta)
+
+
+@pytest.mark.parametrize("derive", [
+    lambda m: m,
+    lambda m: m.locked(["d2", "d9"]),
+    lambda m: m.with_added(stiffness={"d3": 50.0}, damping={"d1": 20.0, "d7": 5.0}),
+    lambda m: m.locked(["d2"]).with_added(damping={"d3": 10.0}).locked(["d4"]),
+], ids=["modal", "locked", "added", "chained"])
+def test_port_receptance_equals_the_direct_solution(derive):
+    model = derive(random_model())
+    omega = np.linspace(0.5, 15.0, 300)
+    outputs = [d for d in ("d1", "d5", "d6") if d in model.dofs]
+    direct = model.receptance(omega, ["d6", "d3"], outputs)
+    fast = model.port_receptance(omega, ["d6", "d3"], outputs)
+    assert_allclose(fast, direct, rtol=1e-9, atol=1e-12 * np.abs(direct).max())
+
+
+def test_port_receptance_of_a_free_model_and_its_rigid_body_mode():
+    free = chain(grounded=False)
+    omega = np.geomspace(0.1, 500.0, 200)
+    direct = free.receptance(omega, ["m0.x"], ["m3.x"])
+    assert_allclose(free.port_receptance(omega, ["m0.x"], ["m3.x"]), direct, rtol=1e-7)
+    # at low frequency the free chain is its total mass: X/F -> -1 / (4 m w^2)
+    assert_allclose(free.port_receptance([0.1], ["m0.x"], ["m0.x"])[0, 0, 0].real,
+                    -1 / (4 * 2.0 * 0.01), rtol=1e-4)
+    with pytest.raises(ValueError, match="infinite at omega = 0"):
+        free.port_receptance([0.0], ["m0.x"], ["m0.x"])

@@ -32,7 +32,8 @@ SUMMARIES = {
     "twomass": "fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
     "modes": "natural frequencies and each mode's share of work-piece X motion",
     "check": "check mass/stiffness matrices (symmetry, definiteness, rigid-body mass, "
-             "fixed-base frequencies, modal effective mass)",
+             "fixed-base frequencies, modal effective mass) and a reduction against the full "
+             "model",
     "friction": "LuGre friction: equivalent damping (Eq 8-10), figures, fits",
     "bode": "loop transfer functions of the velocity and position loops, with margins",
     "compliance": "work-piece X compliance with a guide-way contact model (Fig 9)",

@@ -4,11 +4,18 @@ The share (``wp_x_participation``) of mode j is its part of the static complianc
 work-piece X DOF: phi_j(wp.x)^2 / omega_j^2 over the sum of the same for every flexible mode
 (phi mass-normalised). The shares add up to 1; rigid-body modes get 0. The mode with the
 largest share is the one that moves the work piece in X.
+
+When the structure is a reduced model whose kept fixed-interface modes do not cover the
+requirements' band with the margin (``servotune.model_checks.band_coverage``), a warning that
+names the band, the frequency reached and the fix goes to standard error (and into the JSON
+under ``warnings``): the modes and the compliance near the top of the band are then not
+reliable.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 
 from ._common import (
     COUNT,
@@ -50,9 +57,14 @@ def run(args) -> int:
 
     with progress.task(f"loading {args.axis}"):
         from ..axis import load_axis
+        from ..model_checks import band_coverage
 
         axis = load_axis(args.axis)
     out = RunOutput.for_args(args, "modes", axis.name, ["results.json"])
+    coverage = band_coverage(axis.structure, axis.requirements)
+    warnings = [] if coverage.covered else [f"band coverage: {coverage.message}"]
+    for text in warnings:
+        print(f"WARNING: {text}", file=sys.stderr)
     model = axis.configuration(pads=args.pads, motor=args.motor)
     with progress.task(f"{axis.name}: modes of {model.n} DOFs"):
         omega = model.natural_frequencies()
@@ -77,6 +89,8 @@ def run(args) -> int:
         "band_hz": [band[0] * HZ, band[1] * HZ],
         "notes": default_notes(axis),
         "folder": str(out.path),
+        "band_coverage": coverage.to_dict(),
+        "warnings": warnings,
     }
     with out.writing() as folder:
         write_results(folder, result)
@@ -94,9 +108,12 @@ def run(args) -> int:
     print(f"  work-piece X mode: {omega[j] * HZ:.2f} Hz ({100 * share[j]:.1f} % of the static "
           "compliance at wp.x)")
     if peak is not None:
+        lo, hi = band[0] * HZ, band[1] * HZ
         print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
-              f"{peak['wp_x_peak_hz']:.2f} Hz ({band[0] * HZ:g}-{band[1] * HZ:g} Hz)")
+              f"{peak['wp_x_peak_hz']:.2f} Hz ({lo:g}-{hi:g} Hz)")
         for note in result["notes"]:
             print(f"  note: {note}")
+    if coverage.reduced:
+        print(f"  {'WARNING: ' if not coverage.covered else ''}{coverage.message}")
     print(f"  wrote {out.path}")
     return 0

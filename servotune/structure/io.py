@@ -11,13 +11,22 @@ names the rows, and checks them before anything is computed with them:
 * ``.hb`` / ``.rsa`` / ``.rua`` / ``.hbmat``: Harwell-Boeing, assembled real matrices, symmetric
   (``RSA``: one triangle stored, as Ansys ``HBMAT`` writes it) or unsymmetric (``RUA``). The
   reader is our own: ``scipy.io.hb_read`` refuses symmetric storage.
+  Files written by ``scipy.io.hb_write`` are read too: their fields are narrower than the
+  Fortran format they declare (24 characters under ``E25.16``), so a section whose
+  blank-separated numbers match the declared count is read by them, any other by the fixed
+  Fortran widths (where fields may touch).
 * ``.mat``: MATLAB files (v5-v7.2, via ``scipy.io.loadmat``), dense or sparse variables; the
   mass is the variable ``M``/``mass`` and the stiffness ``K``/``stiffness`` unless named.
+* ``.op4``: Nastran OUTPUT4 files, ASCII or binary, dense or sparse, through pyyeti's reader
+  (``pyyeti.nastran.op4``); one file may hold both matrices (``MAA``/``KAA``, ``MGG``/``KGG``,
+  ``M``/``K``, ``MASS``/``STIFFNESS``, or named).
 
 A DOF map is a CSV file with a header row and either a ``name`` column or ``node`` and ``dof``
 columns (the name is then ``<node>.<dof>``, e.g. ``12.ux``); an optional ``index`` column
 (1-based, like Ansys' "Matrix Eqn" mapping) orders the rows. Without a map the DOFs are named
-``dof.1``, ``dof.2``, ...
+``dof.1``, ``dof.2``, ... The rows servotune needs under its own names (``pad1.x``, ``wp.x``,
+``motor.rotor``, ``encoder.x``) are named from their node numbers and directions by a ports
+file (``ports=`` of :func:`read_structure`; see :mod:`servotune.structure.ports`).
 
 References
 ----------
@@ -25,6 +34,8 @@ R. F. Boisvert, R. Pozo, K. A. Remington, "The Matrix Market exchange formats: i
 NISTIR 5935 (1996).
 I. S. Duff, R. G. Grimes, J. G. Lewis, "Users' guide for the Harwell-Boeing sparse matrix
 collection", CERFACS TR/PA/92/86 (1992).
+MSC Nastran DMAP Programmer's Guide, OUTPUT4 module (the op4 format); T. P. Widrick, pyYeti,
+``pyyeti.nastran.op4`` (the reader used).
 """
 
 from __future__ import annotations
@@ -43,6 +54,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 
 from .model import ModalModel, UnknownDofError
+from .ports import PortError, name_ports, normalise_node
 
 __all__ = [
     "MatrixFileError",
@@ -51,6 +63,7 @@ __all__ = [
     "read_dof_map",
     "read_harwell_boeing",
     "read_matrix",
+    "read_op4",
     "read_structure",
     "write_npz",
 ]
@@ -58,8 +71,10 @@ __all__ = [
 SYMMETRY_TOLERANCE = 1e-8  # max |A - A^T| relative to max |A|
 _MTX = (".mtx", ".mmf", ".mm")
 _HB = (".hb", ".rsa", ".rua", ".hbmat", ".hbm")
-_MASS_NAMES = ("mass", "m", "mass_matrix")
-_STIFFNESS_NAMES = ("stiffness", "k", "stiffness_matrix")
+_OP4 = (".op4",)
+_MASS_NAMES = ("mass", "m", "mass_matrix", "maa", "mgg", "mff", "mll")
+_STIFFNESS_NAMES = ("stiffness", "k", "stiffness_matrix", "kaa", "kgg", "kff", "kll")
+_BOTH = (".npz", ".mat", ".op4")  # files that may hold both matrices
 
 
 class MatrixFileError(ValueError):
@@ -75,7 +90,22 @@ def _fortran_fields(fmt: str, path) -> tuple[int, int]:
     return int(m.group(1) or 1), int(m.group(2))
 
 
+def _numbers(tokens) -> bool:
+    try:
+        for t in tokens:
+            float(t.upper().replace("D", "E"))
+    except ValueError:
+        return False
+    return True
+
+
 def _read_fixed(lines, n_values, fmt, path, kind):
+    """The values of one section: by blanks when that gives exactly the declared count of
+    numbers (scipy's ``hb_write`` writes fields narrower than its declared format), else by the
+    Fortran field widths (which is what a format with touching fields needs)."""
+    tokens = " ".join(lines).split()
+    if len(tokens) == n_values and _numbers(tokens):
+        return tokens
     per_line, width = _fortran_fields(fmt, path)
     values = []
     for line in lines:
@@ -146,6 +176,45 @@ def read_harwell_boeing(path) -> scipy.sparse.csc_array:
     return scipy.sparse.csc_array(a)
 
 
+def read_op4(path) -> dict:
+    """All matrices of a Nastran OUTPUT4 file (ASCII or binary), by lower-case name.
+
+    Read by pyyeti's ``pyyeti.nastran.op4.read``; dense matrices stay dense arrays, sparse
+    ones come as ``scipy.sparse`` arrays.
+
+    Raises
+    ------
+    MatrixFileError
+        The file cannot be read as op4.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise MatrixFileError(f"{path}: no such file")
+    try:
+        from pyyeti.nastran import op4
+    except ImportError:  # a dependency; only a broken installation lacks it
+        raise MatrixFileError(f"{path}: reading .op4 files needs the pyyeti package "
+                              "(pip install pyyeti)") from None
+    try:
+        data = op4.read(str(path), sparse=None)
+    except Exception as exc:
+        raise MatrixFileError(f"{path}: cannot read as a Nastran OUTPUT4 (.op4) file "
+                              f"({type(exc).__name__}: {exc})") from None
+    if not data:
+        raise MatrixFileError(f"{path}: the op4 file holds no matrix")
+    return {str(k).lower(): v for k, v in data.items()}
+
+
+def _from_op4(path, names):
+    data = read_op4(path)
+    for n in names:
+        if n.lower() in data:
+            return data[n.lower()]
+    raise MatrixFileError(f"{path}: none of the matrices {[n.upper() for n in names]} is in "
+                          f"the file (it holds {sorted(k.upper() for k in data)}); name the "
+                          "matrix")
+
+
 def _from_npz(path, name):
     try:
         data = np.load(path, allow_pickle=False)
@@ -187,9 +256,10 @@ def read_matrix(path, name: str | None = None):
     Parameters
     ----------
     path : path-like
-        ``.npz``, ``.mtx``/``.mmf``, a Harwell-Boeing suffix or ``.mat``.
+        ``.npz``, ``.mtx``/``.mmf``, a Harwell-Boeing suffix, ``.mat`` or ``.op4``.
     name : str, optional
-        The variable or array name in ``.npz``/``.mat`` files (default ``mass``/``M``).
+        The variable or array name in ``.npz``/``.mat``/``.op4`` files (default the mass:
+        ``mass``/``M``/``MAA``/``MGG``).
 
     Returns
     -------
@@ -212,10 +282,13 @@ def read_matrix(path, name: str | None = None):
             a = read_harwell_boeing(path)
         elif suffix == ".mat":
             a = _from_mat(path, [name] if name else _MASS_NAMES)
+        elif suffix in _OP4:
+            a = _from_op4(path, [name] if name else _MASS_NAMES)
         else:
             raise MatrixFileError(
                 f"{path}: unknown matrix file type {suffix!r}; use .npz, .mtx/.mmf (Matrix"
-                f"Market), {'/'.join(_HB)} (Harwell-Boeing) or .mat (MATLAB)")
+                f"Market), {'/'.join(_HB)} (Harwell-Boeing), .mat (MATLAB) or .op4 (Nastran "
+                "OUTPUT4)")
     except UnicodeDecodeError:
         raise MatrixFileError(f"{path}: not a text file of the expected format") from None
     if scipy.sparse.issparse(a):
@@ -247,7 +320,8 @@ def read_dof_map(path) -> tuple[str, ...]:
     if "name" in cols:
         names = [r[cols["name"]].strip() for r in rows]
     elif "node" in cols and "dof" in cols:
-        names = [f"{r[cols['node']].strip()}.{r[cols['dof']].strip().lower()}" for r in rows]
+        names = [f"{normalise_node(r[cols['node']])}.{r[cols['dof']].strip().lower()}"
+                 for r in rows]
     else:
         raise MatrixFileError(f"{path}: the DOF map needs a 'name' column or 'node' and 'dof' "
                               f"columns, found {list(cols)}")
@@ -341,14 +415,15 @@ def _negative_eigenvalues(a) -> int:
 
 
 def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffness_name=None,
-                   symmetry_tolerance: float = SYMMETRY_TOLERANCE) -> StructureMatrices:
+                   symmetry_tolerance: float = SYMMETRY_TOLERANCE, ports=None,
+                   coordinates=None, port_tolerance: float = 1e-3) -> StructureMatrices:
     """Read and check a mass/stiffness pair with its DOF names.
 
     Parameters
     ----------
     mass : path-like
-        The mass matrix file; for ``.npz`` and ``.mat`` it may hold both matrices (and, for
-        ``.npz``, ``dofs``), then ``stiffness`` may be omitted.
+        The mass matrix file; ``.npz``, ``.mat`` and ``.op4`` files may hold both matrices
+        (and an ``.npz`` the ``dofs``), then ``stiffness`` may be omitted.
     stiffness : path-like, optional
         The stiffness matrix file.
     dof_map : path-like, optional
@@ -357,24 +432,42 @@ def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffn
         Variable names inside ``.npz``/``.mat`` files.
     symmetry_tolerance : float
         Largest accepted max |A - A^T| / max |A|.
+    ports : path-like or sequence of Port, optional
+        Names for rows of the DOF map given by node number (or position) and direction (see
+        :mod:`servotune.structure.ports`), e.g. ``pad1.x`` for node 1204 UX.
+    coordinates : path-like or mapping node -> (x, y, z), optional
+        Node positions [m] (CSV ``node,x,y,z``), for ports given by position.
+    port_tolerance : float
+        Largest distance [m] between a port's position and its node.
 
     Raises
     ------
     MatrixFileError
         Unreadable file; non-square, mismatched, asymmetric matrices; a mass matrix with a
-        negative eigenvalue (indefinite); a DOF map of the wrong length.
+        negative eigenvalue (indefinite); a DOF map of the wrong length; a port that is not in
+        the export.
+
+    Examples
+    --------
+    Ports named from node numbers of an export (``ports.csv``: ``port,node,direction`` rows
+    ``wp.x,1207,UX`` and ``motor.rotor,9001,ROTX``)::
+
+        data = read_structure("M.mtx", "K.mtx", "dofs.csv", ports="ports.csv")
+        data.index(["wp.x", "motor.rotor"])
     """
     mass = Path(mass)
     stiffness_path = mass if stiffness is None else Path(stiffness)
     source = str(mass) if stiffness is None else f"{mass} + {stiffness_path}"
-    if stiffness is None and mass.suffix.lower() not in (".npz", ".mat"):
-        raise MatrixFileError(f"{mass}: give the stiffness file too (only .npz and .mat files "
-                              "hold both matrices)")
+    if stiffness is None and mass.suffix.lower() not in _BOTH:
+        raise MatrixFileError(f"{mass}: give the stiffness file too (only .npz, .mat and .op4 "
+                              "files hold both matrices)")
     m = read_matrix(mass, mass_name)
-    if stiffness_path.suffix.lower() == ".mat":
-        k = scipy.sparse.csr_array(
-            _from_mat(stiffness_path, [stiffness_name] if stiffness_name else _STIFFNESS_NAMES),
-            dtype=float)
+    if stiffness_path.suffix.lower() in (".mat", ".op4"):
+        reader = _from_mat if stiffness_path.suffix.lower() == ".mat" else _from_op4
+        k = reader(stiffness_path, [stiffness_name] if stiffness_name else _STIFFNESS_NAMES)
+        k = scipy.sparse.csr_array(k, dtype=float)
+        if not np.all(np.isfinite(k.data)):
+            raise MatrixFileError(f"{stiffness_path}: the matrix has NaN or infinite entries")
     else:
         k = read_matrix(stiffness_path, stiffness_name or "stiffness")
     for label, a, p in (("mass", m, mass), ("stiffness", k, stiffness_path)):
@@ -397,6 +490,15 @@ def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffn
     if len(dofs) != m.shape[0]:
         raise MatrixFileError(f"{dof_map or mass}: the DOF map names {len(dofs)} DOFs but the "
                               f"matrices have {m.shape[0]}")
+    if ports is not None:
+        if coordinates is not None and isinstance(coordinates, (str, os.PathLike)):
+            coordinates = read_coordinates(coordinates)
+        try:
+            dofs = name_ports(dofs, ports, coordinates, port_tolerance)
+        except PortError as exc:
+            where = f"{ports}: " if isinstance(ports, (str, os.PathLike)) \
+                and str(ports) not in str(exc) else ""
+            raise MatrixFileError(f"{where}{exc}") from None
     return StructureMatrices(m, k, dofs, source)
 
 
@@ -439,7 +541,8 @@ def write_npz(path, mass, stiffness, dofs, force: bool = False) -> Path:
 
 def read_coordinates(path) -> dict[str, np.ndarray]:
     """Node coordinates [m] from a CSV file with a header ``node,x,y,z`` (for the geometric
-    rigid-body motions of :func:`servotune.structure.cb_check`)."""
+    rigid-body motions of :func:`servotune.structure.cb_check` and for ports given by
+    position). Integer node ids are normalised (``"0012"`` and ``"12.0"`` are node 12)."""
     path = Path(path)
     try:
         with open(path, newline="") as handle:
@@ -451,10 +554,17 @@ def read_coordinates(path) -> dict[str, np.ndarray]:
                               "per node")
     out = {}
     for r in rows:
-        r = {k.strip().lower(): v for k, v in r.items()}
+        r = {k.strip().lower(): v for k, v in r.items() if k}
+        node = normalise_node(r.get("node") or "")
+        if not node:
+            raise MatrixFileError(f"{path}: a row has no node id")
+        if node in out:
+            raise MatrixFileError(f"{path}: node {node} is listed twice")
         try:
-            out[r["node"].strip()] = np.array([float(r[c]) for c in "xyz"])
+            out[node] = np.array([float(r[c]) for c in "xyz"])
         except (TypeError, ValueError):
             raise MatrixFileError(f"{path}: node {r.get('node')!r} has a coordinate that is "
                                   "not a number") from None
+        if not np.all(np.isfinite(out[node])):
+            raise MatrixFileError(f"{path}: node {node} has a coordinate that is not finite")
     return out

@@ -29,13 +29,14 @@ sec 3 (41-DOF reduced model, 3 % modal damping).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import control
 import numpy as np
 import scipy.linalg
 
-__all__ = ["ModalModel", "UnknownDofError", "signal_name"]
+__all__ = ["ModalModel", "ReductionInfo", "UnknownDofError", "signal_name"]
 
 SYMMETRY_TOLERANCE = 1e-8  # relative to the largest entry
 
@@ -70,6 +71,66 @@ def _check_matrix(name: str, a, n: int | None = None) -> np.ndarray:
     return 0.5 * (a + a.T)
 
 
+@dataclass(frozen=True)
+class ReductionInfo:
+    """How a model was reduced by Craig-Bampton: what its fixed-interface modes cover.
+
+    Attributes
+    ----------
+    n_full, n_boundary : int
+        DOFs of the full FE model and boundary DOFs kept as physical coordinates.
+    fixed_interface_hz : tuple of float
+        Frequencies of the kept fixed-interface modes [Hz], ascending.
+    next_hz : float
+        The first fixed-interface mode not kept [Hz]: ``inf`` when every one is kept, ``nan``
+        when it is not known.
+    complete_below_hz : float
+        Every fixed-interface mode below this frequency is kept [Hz] (verified by a dense
+        solution or a Sturm count; ``inf`` when all are kept).
+    method : str
+        How the fixed-interface modes were computed: "dense", "lanczos" (with a Sturm
+        check), "lanczos-unchecked" or "none".
+    restarts : int
+        Deflated Lanczos restarts the Sturm check asked for.
+    """
+
+    n_full: int
+    n_boundary: int
+    fixed_interface_hz: tuple[float, ...]
+    next_hz: float = math.nan
+    complete_below_hz: float = math.nan
+    method: str = "unknown"
+    restarts: int = 0
+
+    def __post_init__(self) -> None:
+        f = tuple(float(x) for x in self.fixed_interface_hz)
+        if any(not math.isfinite(x) or x < 0 for x in f):
+            raise ValueError("fixed_interface_hz must hold finite frequencies >= 0")
+        if int(self.n_boundary) < 0 or int(self.n_full) < int(self.n_boundary) + len(f):
+            raise ValueError(f"inconsistent sizes: {self.n_full} DOFs, {self.n_boundary} "
+                             f"boundary DOFs and {len(f)} modes")
+        object.__setattr__(self, "fixed_interface_hz", f)
+        object.__setattr__(self, "n_full", int(self.n_full))
+        object.__setattr__(self, "n_boundary", int(self.n_boundary))
+
+    @property
+    def reached_hz(self) -> float:
+        """Frequency of the highest kept fixed-interface mode [Hz] (0 with none kept)."""
+        return self.fixed_interface_hz[-1] if self.fixed_interface_hz else 0.0
+
+    def to_dict(self) -> dict:
+        """Plain values for JSON (``None`` for an unknown or unbounded frequency)."""
+        def finite(x):
+            return float(x) if math.isfinite(x) else None
+
+        return {"n_full": self.n_full, "n_boundary": self.n_boundary,
+                "n_modes": len(self.fixed_interface_hz),
+                "fixed_interface_hz": list(self.fixed_interface_hz),
+                "next_hz": finite(self.next_hz), "all_kept": self.next_hz == math.inf,
+                "complete_below_hz": finite(self.complete_below_hz),
+                "method": self.method, "restarts": self.restarts}
+
+
 @dataclass(frozen=True, eq=False)
 class ModalModel:
     """Reduced structural model with named DOFs and modal damping.
@@ -87,6 +148,10 @@ class ModalModel:
         value for all. Default 0.03 (the paper, sec 3).
     damping : (n, n) array_like, optional
         A physical damping matrix [N s/m, ...] to use instead of ``damping_ratio``.
+    reduction : ReductionInfo, optional
+        For a Craig-Bampton model, what its fixed-interface modes cover (set by
+        :func:`~servotune.structure.craig_bampton`; kept by :meth:`locked`,
+        :meth:`with_damping` and :meth:`with_added`).
 
     Raises
     ------
@@ -109,7 +174,9 @@ class ModalModel:
     dofs: tuple[str, ...]
     damping_ratio: float | np.ndarray = 0.03
     damping: np.ndarray | None = None
+    reduction: ReductionInfo | None = field(default=None, kw_only=True)
     _modes: tuple = field(init=False, repr=False, compare=False)
+    _ports: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         dofs = tuple(str(d) for d in self.dofs)
@@ -151,7 +218,10 @@ class ModalModel:
         object.__setattr__(self, "dofs", dofs)
         object.__setattr__(self, "damping", d)
         object.__setattr__(self, "damping_ratio", zeta if self.damping is None else None)
+        if self.reduction is not None and not isinstance(self.reduction, ReductionInfo):
+            raise ValueError("reduction must be a ReductionInfo or None")
         object.__setattr__(self, "_modes", (omega, phi))
+        object.__setattr__(self, "_ports", {})
 
     # -- names ---------------------------------------------------------------------------
     @property
@@ -216,12 +286,15 @@ class ModalModel:
         if keep.size == 0:
             raise ValueError("cannot lock every DOF of the model")
         sub = np.ix_(keep, keep)
-        return ModalModel(self.mass[sub], self.stiffness[sub], [self.dofs[i] for i in keep],
-                          damping=self.damping[sub])
+        held = ModalModel(self.mass[sub], self.stiffness[sub], [self.dofs[i] for i in keep],
+                          damping=self.damping[sub], reduction=self.reduction)
+        held._ports["base"] = ("locked", self, [self.dofs[i] for i in sorted(drop)])
+        return held
 
     def with_damping(self, damping_ratio) -> ModalModel:
         """The same M and K with modal damping re-assigned on this configuration's modes."""
-        return ModalModel(self.mass, self.stiffness, self.dofs, damping_ratio=damping_ratio)
+        return ModalModel(self.mass, self.stiffness, self.dofs, damping_ratio=damping_ratio,
+                          reduction=self.reduction)
 
     def with_added(self, stiffness=None, damping=None) -> ModalModel:
         """The model with extra physical stiffness and/or damping (e.g. contact springs and
@@ -241,7 +314,15 @@ class ModalModel:
                     target[i, i] += value
             else:
                 target += _check_matrix("added matrix", extra, self.n)
-        return ModalModel(self.mass, k, self.dofs, damping=d)
+        new = ModalModel(self.mass, k, self.dofs, damping=d, reduction=self.reduction)
+        # the added elements live on a few DOFs S: port_receptance goes through the parent
+        dk, dd = k - self.stiffness, d - self.damping
+        touched = np.flatnonzero((np.abs(dk).sum(axis=0) + np.abs(dd).sum(axis=0)) > 0)
+        if 0 < touched.size <= max(self.n // 4, 1):
+            sub = np.ix_(touched, touched)
+            new._ports["base"] = ("added", self, [self.dofs[i] for i in touched], dk[sub],
+                                  dd[sub])
+        return new
 
     # -- systems ---------------------------------------------------------------------------
     def to_state_space(self, inputs=None, outputs=None, velocity_outputs=(),
@@ -287,6 +368,10 @@ class ModalModel:
     def receptance(self, omega, inputs, outputs) -> np.ndarray:
         """Displacement per force X/F(j omega) between named DOFs by direct solution.
 
+        Solves (K - w^2 M + j w D) X = F at every frequency (a cost of n^3 per frequency;
+        :meth:`port_receptance` gives the same from the modes at a cost linear in the number
+        of modes, the way to go for models of more than a few dozen DOFs).
+
         Returns an array of shape (len(omega), len(outputs), len(inputs)) [m/N, ...].
         """
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
@@ -298,6 +383,79 @@ class ModalModel:
             dyn = self.stiffness - w * w * self.mass + 1j * w * self.damping
             out[j] = np.linalg.solve(dyn, rhs)[i_out]
         return out
+
+    def _modal_damping_diagonal(self):
+        """diag(Phi^T D Phi) when the damping is diagonal in the modes (to 1e-9), else None
+        (cached)."""
+        if "modal_d" not in self._ports:
+            phi = self._modes[1]
+            dm = phi.T @ self.damping @ phi
+            off = dm - np.diag(np.diag(dm))
+            scale = max(float(np.abs(dm).max(initial=0.0)), 1e-300)
+            diagonal = float(np.abs(off).max(initial=0.0)) <= 1e-9 * scale
+            self._ports["modal_d"] = np.diag(dm).copy() if diagonal else None
+        return self._ports["modal_d"]
+
+    def port_receptance(self, omega, inputs, outputs) -> np.ndarray:
+        """Receptance X/F(j omega) between named DOFs through the modes and the ports: a cost
+        linear in the number of modes per frequency.
+
+        Same result and shape as :meth:`receptance`, (len(omega), len(outputs), len(inputs)).
+
+        Notes
+        -----
+        With modal damping (mass-normalised modes Phi, Phi^T D Phi = diag(2 zeta_j omega_j))
+        it is the modal sum ``H = Phi_out diag(1 / (omega_j^2 - w^2 + 2 j zeta_j omega_j w))
+        Phi_in^T``. A model derived from one with modal damping by :meth:`locked` or
+        :meth:`with_added` (whose physical damping is then no longer diagonal in its own modes)
+        is evaluated through the parent's receptance at the few DOFs concerned, S:
+
+        * DOFs held: ``H = H_oi - H_oS H_SS^-1 H_Si`` (the reactions that keep u_S = 0);
+        * elements added on S, Delta(w) = dK_SS + j w dD_SS (Woodbury's identity):
+          ``H = H_oi - H_oS (I + Delta H_SS)^-1 Delta H_Si``;
+
+        an |S| x |S| solve per frequency. Any other non-modal damping falls back to
+        :meth:`receptance`.
+
+        Examples
+        --------
+        The driving point of a damped spring-mass, 1 / (k - m w^2 + j c w) = 1 / (6 + 0.4 j):
+
+        >>> model = ModalModel([[2.0]], [[8.0]], ["x"], damping=[[0.4]])
+        >>> h = complex(model.port_receptance([1.0], ["x"], ["x"])[0, 0, 0])
+        >>> bool(abs(h - 1 / (6 + 0.4j)) < 1e-15)
+        True
+        """
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        inputs, outputs = list(inputs), list(outputs)
+        i_in, i_out = self.index(inputs), self.index(outputs)
+        d = self._modal_damping_diagonal()
+        if d is not None:
+            wr, phi = self._modes
+            p_out, p_in = phi[i_out], phi[i_in]
+            out = np.empty((omega.size, len(i_out), len(i_in)), dtype=complex)
+            chunk = max(1, 4_000_000 // max(self.n, 1))
+            for a in range(0, omega.size, chunk):
+                w = omega[a:a + chunk]
+                den = wr[None, :] ** 2 - w[:, None] ** 2 + 1j * w[:, None] * d[None, :]
+                if np.any(den == 0):
+                    raise ValueError("the receptance is infinite at omega = 0 for a model with "
+                                     "rigid-body modes")
+                out[a:a + chunk] = np.einsum("oj,fj,ij->foi", p_out, 1.0 / den, p_in)
+            return out
+        base = self._ports.get("base")
+        if base is None:
+            return self.receptance(omega, inputs, outputs)
+        kind, parent, s_dofs = base[:3]
+        n_o, n_i, n_s = len(outputs), len(inputs), len(s_dofs)
+        h = parent.port_receptance(omega, inputs + s_dofs, outputs + s_dofs)
+        h_oi, h_os = h[:, :n_o, :n_i], h[:, :n_o, n_i:]
+        h_si, h_ss = h[:, n_o:, :n_i], h[:, n_o:, n_i:]
+        if kind == "locked":
+            return h_oi - h_os @ np.linalg.solve(h_ss, h_si)
+        dk, dd = base[3], base[4]
+        delta = dk[None] + 1j * omega[:, None, None] * dd[None]
+        return h_oi - h_os @ np.linalg.solve(np.eye(n_s) + delta @ h_ss, delta @ h_si)
 
     # -- participation -----------------------------------------------------------------------
     def modal_compliance(self, dof: str) -> np.ndarray:
@@ -339,10 +497,10 @@ class ModalModel:
         if not 0 < omega_min < omega_max:
             raise ValueError(f"need 0 < omega_min < omega_max, got {omega_min}, {omega_max}")
         grid = np.geomspace(omega_min, omega_max, n)
-        mag = np.abs(self.receptance(grid, [dof], [dof])[:, 0, 0])
+        mag = np.abs(self.port_receptance(grid, [dof], [dof])[:, 0, 0])
         j = int(np.argmax(mag))
         lo, hi = grid[max(j - 1, 0)], grid[min(j + 1, n - 1)]
-        res = minimize_scalar(lambda w: -abs(self.receptance([w], [dof], [dof])[0, 0, 0]),
+        res = minimize_scalar(lambda w: -abs(self.port_receptance([w], [dof], [dof])[0, 0, 0]),
                               bounds=(lo, hi), method="bounded",
                               options={"xatol": 1e-9 * hi})
         if -res.fun > mag[j]:

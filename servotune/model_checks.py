@@ -1,0 +1,253 @@
+"""Checks of an axis model before it is tuned: does the structure fit the drive and the band?
+
+Two checks on the structure (a :class:`~servotune.structure.ModalModel`) with the drive or the
+requirements, each returning a frozen result with a verdict and a message that names what is
+wrong and the fix:
+
+* :func:`transmission_check`: the structure's own transmission, the static motion of the
+  linear-encoder DOF per radian of the motor rotor (relative to the stator) with the guide-way
+  pads free, against the drive's transmission ratio r [m/rad], sign included. With a linear
+  encoder the position loop measures x_fb = u_encoder and commands the motor speed
+  Kv (x_ref - x_fb) / r; if the structure moves the encoder by -r per radian (a flipped DOF
+  direction in an FE export) the loop is positive feedback, whatever the gains. The check names
+  which direction is flipped: the encoder's, when the other slide DOFs (pads, work piece) move
+  with the motor as the drive says, or the rotor's, when they all move the other way.
+* :func:`band_coverage`: whether the kept fixed-interface modes of a reduced structure cover
+  the requirements' band with a margin (see :func:`servotune.structure.mode_coverage`).
+
+The static motion: the rotor is turned by 1 rad with the stator held (or grounded), no other
+load, and K_ff u_f = -K_fr solved for the remaining DOFs f (a least-squares solution if the
+structure can still move; the encoder's motion is then checked to be determined).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .drive import Drive
+from .requirements import Requirements
+from .structure.coverage import DEFAULT_MARGIN, BandCoverage, mode_coverage
+from .structure.model import ModalModel
+
+__all__ = [
+    "TRANSMISSION_TOLERANCE",
+    "BandCoverage",
+    "TransmissionCheck",
+    "band_coverage",
+    "transmission_check",
+]
+
+#: Largest accepted |structure ratio / drive ratio - 1| (both describe the same gear).
+TRANSMISSION_TOLERANCE = 0.02
+
+
+@dataclass(frozen=True)
+class TransmissionCheck:
+    """The structure's rotor-to-encoder motion against the drive's transmission ratio.
+
+    Attributes
+    ----------
+    rotor, stator : str, str or None
+        The motor DOFs (rad); ``stator`` None when grounded.
+    encoder : str or None
+        The linear-encoder DOF [m] (None when the drive has motor feedback and the structure
+        has no such DOF).
+    feedback : str
+        "linear" or "motor".
+    drive_ratio : float
+        r [m/rad] of the drive (> 0).
+    structure_ratio : float or None
+        Encoder displacement per radian of rotor-minus-stator rotation from the structure
+        [m/rad] (None when it could not be determined).
+    slide_ratios : tuple of (str, float)
+        The same for the other translational DOFs in the encoder's direction (pads, work
+        piece), which tell a flipped encoder from a flipped rotor.
+    status : str
+        "ok", "flipped", "mismatch" (same sign, different size), "undetermined" or
+        "not applicable" (motor feedback: the loop measures r times the motor angle).
+    flipped : str or None
+        The DOF whose direction is flipped, when it can be told.
+    passed : bool
+    message : str
+    """
+
+    rotor: str
+    stator: str | None
+    encoder: str | None
+    feedback: str
+    drive_ratio: float
+    structure_ratio: float | None
+    slide_ratios: tuple[tuple[str, float], ...]
+    status: str
+    flipped: str | None
+    passed: bool
+    message: str
+
+    def to_dict(self) -> dict:
+        """Plain values for JSON (SI)."""
+        return {"rotor": self.rotor, "stator": self.stator, "encoder": self.encoder,
+                "feedback": self.feedback, "drive_ratio": self.drive_ratio,
+                "structure_ratio": self.structure_ratio,
+                "slide_ratios": {k: v for k, v in self.slide_ratios},
+                "status": self.status, "flipped": self.flipped, "passed": self.passed,
+                "message": self.message}
+
+
+def _static_motion(structure: ModalModel, rotor: str, stator: str | None):
+    """Displacements of all DOFs for 1 rad of rotor rotation (stator held), and a mask of the
+    DOFs whose motion is determined (not free to move with the motor held)."""
+    k = structure.stiffness
+    r = int(structure.index(rotor))
+    held = [r] + ([] if stator is None else [int(structure.index(stator))])
+    free = np.array([i for i in range(structure.n) if i not in held], dtype=int)
+    u = np.zeros(structure.n)
+    u[r] = 1.0
+    determined = np.ones(structure.n, dtype=bool)
+    if free.size:
+        k_ff = k[np.ix_(free, free)]
+        rhs = -k[free, r]
+        w, v = np.linalg.eigh(k_ff)
+        scale = max(float(np.abs(w).max(initial=0.0)), 1e-300)
+        flexible = w > 1e-10 * scale
+        # minimum-norm solution; components along the remaining rigid motions are undetermined
+        u[free] = v[:, flexible] @ ((v[:, flexible].T @ rhs) / w[flexible])
+        null = v[:, ~flexible]
+        if null.size:
+            determined[free] = np.abs(null).max(axis=1) < 1e-6
+    return u, determined
+
+
+def transmission_check(structure: ModalModel, drive: Drive,
+                       tolerance: float = TRANSMISSION_TOLERANCE) -> TransmissionCheck:
+    """Compare the structure's static rotor-to-encoder motion with the drive's ratio.
+
+    Parameters
+    ----------
+    structure : ModalModel
+        The axis structure with the guide-way pads free (``Axis.structure``).
+    drive : Drive
+        Its ``ratio`` [m/rad], ``motor.rotor``/``motor.stator``, ``encoder`` and ``feedback``.
+    tolerance : float
+        Largest accepted |structure ratio / drive ratio - 1|.
+
+    Returns
+    -------
+    TransmissionCheck
+
+    Raises
+    ------
+    UnknownDofError
+        The structure lacks the rotor, the stator or (linear feedback) the encoder DOF.
+
+    Examples
+    --------
+    A slide (encoder on it) geared to a rotor by a spring on u - r theta, r = 2 mm/rad: the
+    encoder moves +2 mm per radian, as the drive says.
+
+    >>> from servotune.drive import Motor, PIController
+    >>> r, k = 2e-3, 1e8
+    >>> s = ModalModel([[500.0, 0], [0, 0.01]], [[k, -k * r], [-k * r, k * r * r]],
+    ...                ["encoder.x", "motor.rotor"])
+    >>> d = Drive(Motor(1.0, 1.0, 1.0, 1e-3, stator=None), ratio=r,
+    ...           current_loop=PIController(1.0), velocity_loop=PIController(1.0), kv=10.0)
+    >>> transmission_check(s, d).status
+    'ok'
+    """
+    rotor, stator = drive.motor.rotor, drive.motor.stator
+    encoder = drive.encoder
+    structure.index([rotor] + ([] if stator is None else [stator]))
+    if drive.feedback == "linear":
+        structure.index(encoder)
+    elif encoder not in structure.dofs:
+        encoder = None
+    u, determined = _static_motion(structure, rotor, stator)
+    ratio = drive.ratio
+    suffix = "." + encoder.rpartition(".")[2] if encoder else ".x"
+    slides = tuple((d, float(u[i])) for i, d in enumerate(structure.dofs)
+                   if d.endswith(suffix) and d != encoder and not d.startswith("mode.")
+                   and determined[i] and abs(u[i]) > 0.1 * ratio)
+    structure_ratio = None
+    if encoder is not None and determined[int(structure.index(encoder))]:
+        structure_ratio = float(u[int(structure.index(encoder))])
+    common = dict(rotor=rotor, stator=stator, encoder=encoder, feedback=drive.feedback,
+                  drive_ratio=ratio, structure_ratio=structure_ratio, slide_ratios=slides)
+    per = f"per radian of {rotor}" + (f" relative to {stator}" if stator else "")
+    if drive.feedback == "motor":
+        shown = "" if structure_ratio is None else \
+            f" (the structure moves {encoder} by {structure_ratio:.4g} m {per})"
+        return TransmissionCheck(**common, status="not applicable", flipped=None, passed=True,
+                                 message="position feedback from the motor encoder "
+                                         f"(x_fb = r x motor angle): no sign to check{shown}")
+    if structure_ratio is None or abs(structure_ratio) < 1e-6 * ratio:
+        why = ("its motion is not determined with the motor held (the slide can move without "
+               "turning the motor)" if structure_ratio is None else "it does not move")
+        return TransmissionCheck(
+            **common, status="undetermined", flipped=None, passed=False,
+            message=f"turning {rotor} does not move the encoder {encoder}: {why}. Check that "
+                    "the structure couples the motor to the slide (ball screw, belt) and that "
+                    "the encoder DOF is on the slide")
+    relative = structure_ratio / ratio - 1.0
+    if structure_ratio < 0:
+        others = [v for _, v in slides]
+        if others and sum(v > 0 for v in others) > len(others) / 2:
+            flipped = encoder
+            which = (f"the direction of the encoder DOF {encoder} is flipped (the pads and the "
+                     f"work piece, {', '.join(d for d, _ in slides)}, move +{ratio:.4g} m/rad "
+                     "as the drive says)")
+        elif others:
+            flipped = rotor
+            which = (f"the direction of the motor rotation {rotor} is flipped against the "
+                     f"slide ({', '.join(d for d, _ in slides)} move negatively too)")
+        else:
+            flipped = None
+            which = f"the direction of {encoder} or of {rotor} is flipped"
+        return TransmissionCheck(
+            **common, status="flipped", flipped=flipped, passed=False,
+            message=f"the structure moves the encoder {encoder} by {structure_ratio:.4g} m "
+                    f"{per}, but the drive's ratio is +{ratio:.4g} m/rad: {which}. With linear "
+                    "feedback the position loop would be positive feedback (unstable at any "
+                    f"gain). Fix: reverse {flipped or 'that DOF'} in the export (multiply its "
+                    "row and column of M and K by -1) or in the DOF map, not the gains")
+    if abs(relative) > tolerance:
+        return TransmissionCheck(
+            **common, status="mismatch", flipped=None, passed=False,
+            message=f"the structure moves the encoder {encoder} by {structure_ratio:.4g} m "
+                    f"{per}, the drive's ratio is {ratio:.4g} m/rad ({100 * relative:+.1f} %): "
+                    "the loop gains would be off by that factor. Fix [drive.transmission] ratio "
+                    "(slide travel per motor radian: lead / (2 pi) / belt ratio) or the "
+                    "structure's transmission")
+    return TransmissionCheck(
+        **common, status="ok", flipped=None, passed=True,
+        message=f"the structure moves the encoder {encoder} by {structure_ratio:.4g} m {per}; "
+                f"the drive's ratio is {ratio:.4g} m/rad ({100 * relative:+.2f} %)")
+
+
+def band_coverage(structure: ModalModel, requirements: Requirements | tuple | None = None,
+                  margin: float = DEFAULT_MARGIN) -> BandCoverage:
+    """Whether the kept fixed-interface modes of a reduced structure cover the band.
+
+    Parameters
+    ----------
+    structure : ModalModel
+        The axis structure (a Craig-Bampton model carries what its modes cover; a model read
+        from a file is judged by its ``mode.*`` DOFs; an unreduced model is covered).
+    requirements : Requirements or (float, float), optional
+        The band of the compliance objective, ``Requirements.band`` [rad/s] (default: the
+        default requirements, 5-300 Hz), or the band itself [rad/s].
+    margin : float
+        Every fixed-interface mode up to margin x the top of the band must be kept.
+
+    Returns
+    -------
+    BandCoverage
+        ``covered``, and a ``message`` naming the band, the frequency reached and the fix.
+    """
+    if requirements is None:
+        requirements = Requirements()
+    band = requirements.band if isinstance(requirements, Requirements) else requirements
+    if len(tuple(band)) != 2 or not all(math.isfinite(float(x)) for x in band):
+        raise ValueError(f"band must be (low, high) in rad/s, got {band!r}")
+    return mode_coverage(structure, band, margin)
