@@ -168,3 +168,23 @@ def test_open_velocity_loop_with_a_rigid_body_is_accurate():
     idx = np.linspace(0, omega.size - 1, 41).astype(int)
     ref = accurate_response(sys, omega[idx])
     assert_allclose(got[idx], ref, rtol=1e-9)
+
+
+def test_receptance_and_port_coupling_with_a_physical_damping_matrix():
+    # pad dampers added as a physical matrix make the damping non-modal: the receptance then
+    # comes from direct solves, and the port coupling must still equal the state-space plant
+    from axis_fixtures import PADS, small_axis, small_drive
+
+    from servotune.frequency import compliance, modal_receptance, port_compliance
+    from servotune.plant import Contact, build_plant
+
+    structure = small_axis().with_added(damping={p: 3e4 for p in PADS})
+    omega = 2 * np.pi * np.geomspace(1.0, 2000.0, 200)
+    ports = ["wp.x", "pad1.x", "motor.rotor"]
+    direct = np.moveaxis(structure.receptance(omega, ports, ports), 0, -1)
+    assert_allclose(modal_receptance(structure, omega, ports, ports), direct, rtol=1e-12)
+    drive = small_drive()
+    contact = Contact.viscous(2e4)
+    plant = build_plant(structure, drive, contact, PADS)
+    assert_allclose(port_compliance(structure, omega, drive, contact, PADS)[0],
+                    compliance(plant, omega), rtol=1e-9)
