@@ -13,11 +13,14 @@ f_n = 922 Hz, zeta = 0.011, modal mass 0.03993 kg, down-milling).
    map with scipy.linalg.expm and multiplies the dense (n + m) x (n + m) maps. The loop is timed
    on a sub-grid and compared per grid point (also against the vectorised code on the same
    sub-grid). This is the top-level ``speedup``.
-3. Accuracy of servotune.chatter.sdm_lobes at its defaults (intervals chosen per speed and
+3. The rule behind the default intervals: the error of b_lim with m = 40, 80, 160 where a
+   tooth period spans 1, 2, 4 and 8 periods of the mode, against the converged limit, and the
+   constant K in error = K (T f / m)^2.
+4. Accuracy of servotune.chatter.sdm_lobes at its defaults (intervals chosen per speed and
    refined until the estimated error of b_lim is below 1 %; 200 speeds over the default range)
    for a/D = 1, 0.1 and 0.05: b_lim at 16 of the speeds against a converged reference (m = 452
    and 640 intervals, extrapolated at second order), beside the former fixed 40 intervals.
-4. Convergence of the semi-discretisation: b_lim at the critical speeds of a/D = 1 and
+5. Convergence of the semi-discretisation: b_lim at the critical speeds of a/D = 1 and
    a/D = 0.05 as the number of intervals per period grows, with the cost per grid point.
 
 BLAS and OpenMP are held to one thread (before numpy is imported) for both methods: the
@@ -180,6 +183,30 @@ def converged_limits(s, speeds, depth_max):
         return np.where(np.isfinite(b[1]), b[1] + (b[1] - b[0]) / ((640 / 452) ** 2 - 1), b[1])
 
 
+def interval_rule_study():
+    """Error of b_lim against the converged limit for m = 40, 80, 160 at speeds where a tooth
+    period spans T f = 1, 2, 4, 8 periods of the mode, and the constant K of err = K (T f/m)^2
+    (the basis of INTERVALS_PER_MODE_PERIOD)."""
+    rows = []
+    for ae in (1.0, 0.1):
+        s = setup(ae)
+        tf = np.array([1.0, 2.0, 4.0, 8.0])
+        speeds = 60.0 / (s.teeth * tf / 922.0)
+        depth_max = 5.0 * chatter.absolute_stability_limit(SYSTEM, s)[0]
+        ref = converged_limits(s, speeds, depth_max)
+        for m in (40, 80, 160):
+            b = chatter.sdm_lobes(SYSTEM, s, speeds, depth_max, intervals=m).depth_limit
+            for k in range(speeds.size):
+                if not (np.isfinite(ref[k]) and np.isfinite(b[k])):
+                    continue
+                err = b[k] / ref[k] - 1.0
+                rows.append({"radial_immersion": ae, "speed_rpm": float(speeds[k]),
+                             "periods_of_mode_per_tooth_period": float(tf[k]), "intervals": m,
+                             "error": float(err),
+                             "k_constant": float(abs(err) / (tf[k] / m) ** 2)})
+    return rows
+
+
 def accuracy_at_defaults():
     rows = []
     for ae in (1.0, 0.1, 0.05):
@@ -256,6 +283,7 @@ def main(argv=None):
                   r["max_abs_error_default"] for r in accuracy),
               "blas_threads": os.environ["OPENBLAS_NUM_THREADS"],
               "zoa": zoa, "sdm": sdm, "sdm_accuracy_at_defaults": accuracy,
+              "sdm_interval_rule": interval_rule_study(),
               "sdm_convergence": convergence()}
     if args.json:
         print(json.dumps(result, indent=2))
