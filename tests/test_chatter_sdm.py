@@ -234,35 +234,39 @@ def test_transfer_function_input():
 
 
 def converged_limits(s, speeds, depth_max):
-    """b_lim with m = 452 and 640 intervals, extrapolated at second order (Richardson:
-    b = b_640 + (b_640 - b_452) / ((640/452)^2 - 1)); independent of sdm_lobes' choices."""
+    """b_lim with m = 640 and 906 intervals, extrapolated at second order (Richardson:
+    b = b_906 + (b_906 - b_640) / ((906/640)^2 - 1)); independent of sdm_lobes' choices. (At
+    a/D = 0.05 the convergence is of order 1.35, which leaves about 0.1 % here.)"""
     from servotune.chatter.sdm import _limit_depths
 
     model = cutting_state_space(BENCH)
     period = 60.0 / (s.teeth * np.asarray(speeds))
     b = [_limit_depths(model, periodic_directional_matrix(s, m)[:, :1, :1], period,
-                       depth_max, 16, 1e-7) for m in (452, 640)]
+                       depth_max, 16, 1e-7) for m in (640, 906)]
     with np.errstate(invalid="ignore"):  # inf where stable up to depth_max
-        return np.where(np.isfinite(b[1]), b[1] + (b[1] - b[0]) / ((640 / 452) ** 2 - 1),
+        return np.where(np.isfinite(b[1]), b[1] + (b[1] - b[0]) / ((906 / 640) ** 2 - 1),
                         b[1])
 
 
-@pytest.mark.parametrize("ae", [0.1, 1.0])
-def test_lobes_at_the_defaults_are_within_one_percent_of_the_converged_limit(ae):
+@pytest.mark.parametrize("ae, speeds", [
+    (0.1, [2400.0, 3300.0, 5000.0, 9000.0, 30000.0, 60000.0]),
+    (1.0, [2400.0, 3300.0, 5000.0, 9000.0, 15847.0, 60000.0]),
+    (0.05, [3300.0, 6400.0, 18185.0])])   # 18185 rpm: the flip lobe's minimum
+def test_lobes_at_the_defaults_are_within_one_percent_of_the_converged_limit(ae, speeds):
     # low speeds (a tooth period spans up to 12 periods of the mode) and high ones
     s = setup(ae)
-    speeds = np.array([2400.0, 3300.0, 5000.0, 9000.0, 30000.0, 60000.0])
+    speeds = np.array(speeds)
     depth_max = 5.0 * absolute_stability_limit(BENCH, s)[0]
     got = sdm_lobes(BENCH, s, speeds, depth_max)
     ref = converged_limits(s, speeds, depth_max)
     finite = np.isfinite(ref)
-    assert finite.sum() >= 4
+    assert finite.sum() >= 3
     assert np.array_equal(np.isfinite(got.depth_limit), finite)
     error = got.depth_limit[finite] / ref[finite] - 1.0
     assert np.all(np.abs(error) < 0.01), error
-    # the reported estimates are below the target and not far from the actual errors
+    # the reported estimates are below the target and not below the actual errors
     assert got.max_error_estimate < 0.01
-    assert np.all(np.abs(error) < 2.0 * got.error_estimate[finite] + 1e-3)
+    assert np.all(np.abs(error) < got.error_estimate[finite] + 1e-3)
     # the former fixed 40 intervals are far off at the low speeds
     fixed = sdm_lobes(BENCH, s, speeds[:2], depth_max, intervals=40)
     assert np.max(np.abs(fixed.depth_limit / ref[:2] - 1.0)) > 0.05

@@ -87,9 +87,11 @@ DEFAULT_INTERVALS = None
 #: the fewest intervals per tooth period the automatic choice uses
 MIN_INTERVALS = 40
 #: intervals per period of the highest significant mode in the automatic choice: the error of
-#: b_lim falls as (T f / m)^2 and was measured up to 8 (T f / m)^2 (benchmarks/README.md), so
-#: 30 per mode period keep it near 1 %
+#: b_lim was measured up to 6.2 (T f / m)^2 (benchmarks/README.md), so 30 per mode period keep
+#: it below 1 % where the convergence is of second order (sdm_lobes checks and refines)
 INTERVALS_PER_MODE_PERIOD = 30
+#: the automatic refinement stops at this many intervals per tooth period
+_MAX_INTERVALS = 4096
 #: the automatic choice takes m from this ladder (steps of sqrt 2 from MIN_INTERVALS)
 _LADDER = np.unique(np.round(MIN_INTERVALS * 2.0 ** (np.arange(16) / 2.0) / 2.0).astype(int) * 2)
 #: matrices per batch of matrix exponentials (bounds the memory of one batch to ~ 50 MB)
@@ -222,9 +224,9 @@ def choose_intervals(model: CuttingStateSpace, period) -> np.ndarray:
     ``m >= max(MIN_INTERVALS, INTERVALS_PER_MODE_PERIOD T f)`` with f = ``model.mode_frequency``
     / 2 pi, the highest significant mode, rounded up on a ladder of steps of sqrt 2 from
     MIN_INTERVALS (so that speeds share matrices). The first-order semi-discretisation
-    interpolates the delayed displacement linearly over T/m; its error in b_lim was measured to
-    fall as (T f / m)^2 with a factor up to 8 (benchmarks/README.md), which this keeps near
-    1 %; :func:`sdm_lobes` checks it and refines further.
+    interpolates the delayed displacement linearly over T/m; its error in b_lim was measured
+    to fall as K (T f / m)^2 with K up to 6.2 (benchmarks/README.md), which this keeps below
+    1 %; :func:`sdm_lobes` checks it and refines further where the convergence is slower.
 
     Examples
     --------
@@ -567,6 +569,8 @@ def _limits_by_intervals(model, setup, periods, m_by, depth_max, scan, tol):
 
 
 def _relative_change(fine, coarse):
+    """Estimated relative error of ``fine`` (m intervals) from ``coarse`` (m / 2), at first
+    order (see :func:`sdm_lobes`)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         change = np.abs(coarse - fine) / fine
     both_inf = ~np.isfinite(fine) & ~np.isfinite(coarse)
@@ -584,11 +588,15 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     the neighbouring grid speeds.
 
     By default the number of intervals per tooth period is chosen per speed
-    (:func:`choose_intervals`) and checked: b_lim is computed also with one step fewer on the
-    sqrt-2 ladder of intervals (m / sqrt 2); the method converges at second order, so the
-    change between the two estimates the error of the finer one (Richardson: the error of m
-    is (b(m/sqrt 2) - b(m)) / (2 - 1)). Where it exceeds ``rtol``, m goes one step up the
-    ladder, until it does not (or m reaches 7240). The estimates are returned.
+    (:func:`choose_intervals`) and checked: b_lim is computed also with half the intervals,
+    and the change between the two estimates the error of the finer one (Richardson: for
+    convergence at order p the error of b(m) is ``|b(m/2) - b(m)| / (2^p - 1)``). The method
+    converges at second order where the cut is long (full slot) but more slowly and less
+    regularly at low immersion, where the tooth enters and leaves inside an interval (order
+    1.35 measured at a/D = 0.05, benchmarks/README.md; b(m) then wanders with m), so the
+    estimate takes p = 1, the change itself. Where it exceeds ``rtol`` the intervals are
+    doubled and the estimate taken again, until it does not (or m reaches 4096). The
+    estimates are returned; they are estimates, not bounds.
 
     Parameters
     ----------
@@ -652,20 +660,17 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     limit = _limits_by_intervals(model, setup, periods, m_by, depth_max, int(scan), tol)
     error = np.full(speeds.size, np.nan)
     if intervals is None:
-        step = np.searchsorted(_LADDER, m_by)
-        m_coarse = 2 * np.round(m_by / (2.0 * math.sqrt(2.0))).astype(int)  # m / sqrt 2, even
-        coarse = _limits_by_intervals(model, setup, periods, m_coarse, depth_max, int(scan),
+        coarse = _limits_by_intervals(model, setup, periods, m_by // 2, depth_max, int(scan),
                                       tol)
         error = _relative_change(limit, coarse)
-        todo = np.flatnonzero((error > rtol) & (step < _LADDER.size - 1))
+        todo = np.flatnonzero((error > rtol) & (m_by < _MAX_INTERVALS))
         while todo.size:
-            step[todo] += 1
-            m_by[todo] = _LADDER[step[todo]]
+            m_by[todo] *= 2
             finer = _limits_by_intervals(model, setup, periods[todo], m_by[todo], depth_max,
                                          int(scan), tol)
             error[todo] = _relative_change(finer, limit[todo])
             limit[todo] = finer
-            todo = todo[(error[todo] > rtol) & (step[todo] < _LADDER.size - 1)]
+            todo = todo[(error[todo] > rtol) & (m_by[todo] < _MAX_INTERVALS)]
     i = int(np.argmin(limit))
     b_min, n_min = float(limit[i]), float(speeds[i])
     if math.isfinite(b_min) and 0 < i < speeds.size - 1:
