@@ -235,8 +235,7 @@ def _triangular_solve(t, rhs, omega, chunk: int = 512):
 
 
 def _modal_form(a, b, c):
-    """Form 1: eigenvectors; None if they are singular. Also returns the eigenvalue condition
-    numbers ||v_i|| ||w_i|| (eigenvectors normalised) for form 2."""
+    """Form 1: the eigenvectors (S = V, J = diag(lambda)); None if they are singular."""
     lam, v = np.linalg.eig(a)
     try:
         lu = scipy.linalg.lu_factor(v, check_finite=False)
@@ -251,7 +250,8 @@ def _modal_form(a, b, c):
 
 
 def _condition_numbers(form):
-    """||w_i|| for each eigenvalue (eigenvectors v_i of unit norm, w_i rows of V^-1)."""
+    """Condition number ||v_i|| ||w_i|| of each eigenvalue (v_i the eigenvectors, w_i the rows
+    of V^-1); large for nearly defective eigenvalues."""
     w = scipy.linalg.lu_solve(form.lu, np.eye(form.s.shape[0]), check_finite=False)
     return np.linalg.norm(w, axis=1) * np.linalg.norm(form.s, axis=0)
 
