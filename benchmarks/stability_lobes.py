@@ -12,8 +12,15 @@ f_n = 922 Hz, zeta = 0.011, modal mass 0.03993 kg, down-milling).
    monodromy for all grid points) against a loop over the grid points that builds each interval
    map with scipy.linalg.expm and multiplies the dense (n + m) x (n + m) maps. The loop is timed
    on a sub-grid and compared per grid point (also against the vectorised code on the same
-   sub-grid).
-3. Convergence of the semi-discretisation: b_lim at the critical speeds of a/D = 1 and
+   sub-grid). This is the top-level ``speedup``.
+3. The rule behind the default intervals: the error of b_lim with m = 40, 80, 160 where a
+   tooth period spans 2.3, 4.3 and 8.3 periods of the mode (near lobe minima), against the
+   converged limit, and the constant K in error = K (T f / m)^2.
+4. Accuracy of servotune.chatter.sdm_lobes at its defaults (intervals chosen per speed and
+   refined until the estimated error of b_lim is below 1 %; 200 speeds over the default range)
+   for a/D = 1, 0.1 and 0.05: b_lim at 16 of the speeds against a converged reference (m = 452
+   and 640 intervals, extrapolated at second order), beside the former fixed 40 intervals.
+5. Convergence of the semi-discretisation: b_lim at the critical speeds of a/D = 1 and
    a/D = 0.05 as the number of intervals per period grows, with the cost per grid point.
 
 BLAS and OpenMP are held to one thread (before numpy is imported) for both methods: the
@@ -132,7 +139,7 @@ def bench_sdm(repeat, sub):
     s = setup(0.05)
     speeds = np.linspace(5000.0, 25000.0, 200)
     depths = np.linspace(0.0, 10e-3, 200)
-    m = chatter.DEFAULT_INTERVALS
+    m = 40
     t_vec, grid = best_time(lambda: chatter.stability_map(SYSTEM, s, speeds, depths,
                                                           intervals=m), repeat)
     model = chatter.cutting_state_space(SYSTEM)
@@ -162,6 +169,75 @@ def bench_sdm(repeat, sub):
             grid.spectral_radius[np.ix_(pick_s, pick_d)] - rho_loop))),
         "stable_fraction": float(grid.stable.mean()),
     }
+
+
+def converged_limits(s, speeds, depth_max):
+    """b_lim with m = 452 and 640, extrapolated at second order."""
+    from servotune.chatter.sdm import _limit_depths
+
+    model = chatter.cutting_state_space(SYSTEM)
+    period = 60.0 / (s.teeth * np.asarray(speeds))
+    b = [_limit_depths(model, chatter.periodic_directional_matrix(s, m)[:, :1, :1], period,
+                       depth_max, 16, 1e-7) for m in (452, 640)]
+    with np.errstate(invalid="ignore"):
+        return np.where(np.isfinite(b[1]), b[1] + (b[1] - b[0]) / ((640 / 452) ** 2 - 1), b[1])
+
+
+def interval_rule_study():
+    """Error of b_lim against the converged limit for m = 40, 80, 160 at speeds where a tooth
+    period spans T f = 2.3, 4.3, 8.3 periods of the mode (near lobe minima), and the constant K
+    of error = K (T f / m)^2 (the basis of INTERVALS_PER_MODE_PERIOD)."""
+    rows = []
+    for ae in (1.0, 0.1, 0.05):
+        s = setup(ae)
+        tf = np.array([8.3, 4.3, 2.3])  # ascending speeds
+        speeds = 60.0 / (s.teeth * tf / 922.0)
+        depth_max = 10.0 * chatter.absolute_stability_limit(SYSTEM, s)[0]
+        ref = converged_limits(s, speeds, depth_max)
+        for m in (40, 80, 160):
+            b = chatter.sdm_lobes(SYSTEM, s, speeds, depth_max, intervals=m,
+                                  tol=1e-6).depth_limit
+            for k in range(speeds.size):
+                if not (np.isfinite(ref[k]) and np.isfinite(b[k])):
+                    continue
+                err = b[k] / ref[k] - 1.0
+                rows.append({"radial_immersion": ae, "speed_rpm": float(speeds[k]),
+                             "periods_of_mode_per_tooth_period": float(tf[k]), "intervals": m,
+                             "error": float(err),
+                             "k_constant": float(abs(err) / (tf[k] / m) ** 2)})
+    return rows
+
+
+def accuracy_at_defaults():
+    rows = []
+    for ae in (1.0, 0.1, 0.05):
+        s = setup(ae)
+        t0 = time.perf_counter()
+        r = chatter.sdm_lobes(SYSTEM, s)
+        elapsed = time.perf_counter() - t0
+        pick = np.linspace(0, r.speed_rpm.size - 1, 16).astype(int)
+        speeds = r.speed_rpm[pick]
+        ref = converged_limits(s, speeds, r.depth_ceiling)
+        t0 = time.perf_counter()
+        fixed = chatter.sdm_lobes(SYSTEM, s, r.speed_rpm, r.depth_ceiling, intervals=40)
+        elapsed_fixed = time.perf_counter() - t0
+        finite = np.isfinite(ref) & np.isfinite(r.depth_limit[pick])
+        err = r.depth_limit[pick][finite] / ref[finite] - 1.0
+        err_fixed = fixed.depth_limit[pick][finite] / ref[finite] - 1.0
+        values, counts = np.unique(r.intervals_by_speed, return_counts=True)
+        rows.append({
+            "radial_immersion": ae, "speed_range_rpm": [float(r.speed_rpm[0]),
+                                                        float(r.speed_rpm[-1])],
+            "speeds": int(r.speed_rpm.size), "time_default_s": elapsed,
+            "time_fixed_40_s": elapsed_fixed, "compared_speeds": int(finite.sum()),
+            "max_abs_error_default": float(np.abs(err).max()),
+            "max_error_estimate_default": r.max_error_estimate,
+            "max_abs_error_fixed_40": float(np.abs(err_fixed).max()),
+            "intervals_used": {str(int(v)): int(c) for v, c in zip(values, counts,
+                                                                    strict=True)},
+            "b_crit_default_m": r.b_crit, "b_crit_fixed_40_m": fixed.b_crit,
+        })
+    return rows
 
 
 def convergence():
@@ -198,9 +274,17 @@ def main(argv=None):
     p.add_argument("--subgrid", type=int, default=12,
                    help="the semi-discretisation loop runs on SUBGRID x SUBGRID points")
     args = p.parse_args(argv)
-    result = {"blas_threads": os.environ["OPENBLAS_NUM_THREADS"],
-              "zoa": bench_zoa(args.repeat), "sdm": bench_sdm(max(1, args.repeat // 2),
-                                                             args.subgrid),
+    sdm = bench_sdm(max(1, args.repeat // 2), args.subgrid)
+    zoa = bench_zoa(args.repeat)
+    accuracy = accuracy_at_defaults()
+    result = {"baseline": "semi-discretisation map: a plain loop over the grid points "
+                          "(scipy.linalg.expm per interval, dense products), 40 intervals",
+              "speedup": sdm["speedup"], "speedup_zero_order_lobes": zoa["speedup"],
+              "max_abs_error_sdm_lobes_at_defaults": max(
+                  r["max_abs_error_default"] for r in accuracy),
+              "blas_threads": os.environ["OPENBLAS_NUM_THREADS"],
+              "zoa": zoa, "sdm": sdm, "sdm_accuracy_at_defaults": accuracy,
+              "sdm_interval_rule": interval_rule_study(),
               "sdm_convergence": convergence()}
     if args.json:
         print(json.dumps(result, indent=2))
@@ -216,6 +300,13 @@ def main(argv=None):
           f"(full grid ~{s['loop_full_grid_estimate_s']:.0f} s); speedup {s['speedup']:.1f}x "
           f"(same sub-grid {s['speedup_same_subgrid']:.1f}x); max |d rho| "
           f"{s['max_abs_difference_spectral_radius']:.1e}")
+    print("sdm_lobes at its defaults against a converged reference (16 speeds):")
+    for r in result["sdm_accuracy_at_defaults"]:
+        print(f"  a/D = {r['radial_immersion']:<4g} {r['speeds']} speeds "
+              f"{r['speed_range_rpm'][0]:.0f}-{r['speed_range_rpm'][1]:.0f} rpm: "
+              f"{r['time_default_s']:.1f} s, max error {100 * r['max_abs_error_default']:.2f} % "
+              f"(estimated {100 * r['max_error_estimate_default']:.2f} %); fixed m = 40: "
+              f"{r['time_fixed_40_s']:.1f} s, max error {100 * r['max_abs_error_fixed_40']:.1f} %")
     print("convergence of b_lim at the critical speed:")
     for r in result["sdm_convergence"]:
         change = r["change_from_previous"]

@@ -104,7 +104,7 @@ def test_periodic_process_converges_with_intervals(ae, speed, order, top):
     # (at a/D = 0.05 the flip lobe is a closed island: bisect below its top)
     b = [limit_at(BENCH, s, speed, periodic_directional_matrix(s, m), top) for m in (20, 40, 80)]
     assert (b[0] - b[1]) / (b[1] - b[2]) > order
-    assert abs(b[1] / b[2] - 1.0) < 0.02  # m = 40 (the default) within 2 % of m = 80
+    assert abs(b[1] / b[2] - 1.0) < 0.02  # m = 40 within 2 % of m = 80 at these speeds
 
 
 def simulate_growth(s, speed_rpm, depth, periods=240, steps=100):
@@ -231,3 +231,57 @@ def test_transfer_function_input():
     args = (np.linspace(15000, 17000, 5), 1e-3)
     assert_allclose(sdm_lobes(tf, s, *args, intervals=20).depth_limit,
                     sdm_lobes(BENCH, s, *args, intervals=20).depth_limit, rtol=1e-6)
+
+
+def converged_limits(s, speeds, depth_max):
+    """b_lim with m = 640 and 906 intervals, extrapolated at second order (Richardson:
+    b = b_906 + (b_906 - b_640) / ((906/640)^2 - 1)); independent of sdm_lobes' choices. (At
+    a/D = 0.05 the convergence is of order 1.35, which leaves about 0.1 % here.)"""
+    from servotune.chatter.sdm import _limit_depths
+
+    model = cutting_state_space(BENCH)
+    period = 60.0 / (s.teeth * np.asarray(speeds))
+    b = [_limit_depths(model, periodic_directional_matrix(s, m)[:, :1, :1], period,
+                       depth_max, 16, 1e-7) for m in (640, 906)]
+    with np.errstate(invalid="ignore"):  # inf where stable up to depth_max
+        return np.where(np.isfinite(b[1]), b[1] + (b[1] - b[0]) / ((906 / 640) ** 2 - 1),
+                        b[1])
+
+
+@pytest.mark.parametrize("ae, speeds", [
+    (0.1, [2400.0, 3300.0, 5000.0, 9000.0, 30000.0, 60000.0]),
+    (1.0, [2400.0, 3300.0, 5000.0, 9000.0, 15847.0, 60000.0]),
+    (0.05, [3300.0, 6400.0, 18185.0])])   # 18185 rpm: the flip lobe's minimum
+def test_lobes_at_the_defaults_are_within_one_percent_of_the_converged_limit(ae, speeds):
+    # low speeds (a tooth period spans up to 12 periods of the mode) and high ones
+    s = setup(ae)
+    speeds = np.array(speeds)
+    depth_max = 5.0 * absolute_stability_limit(BENCH, s)[0]
+    got = sdm_lobes(BENCH, s, speeds, depth_max)
+    ref = converged_limits(s, speeds, depth_max)
+    finite = np.isfinite(ref)
+    assert finite.sum() >= 3
+    assert np.array_equal(np.isfinite(got.depth_limit), finite)
+    error = got.depth_limit[finite] / ref[finite] - 1.0
+    assert np.all(np.abs(error) < 0.01), error
+    # the reported estimates are below the target and not below the actual errors
+    assert got.max_error_estimate < 0.01
+    assert np.all(np.abs(error) < got.error_estimate[finite] + 1e-3)
+    # the former fixed 40 intervals are far off at the low speeds
+    fixed = sdm_lobes(BENCH, s, speeds[:2], depth_max, intervals=40)
+    assert np.max(np.abs(fixed.depth_limit / ref[:2] - 1.0)) > 0.05
+
+
+def test_intervals_follow_the_tooth_period_and_the_mode():
+    from servotune.chatter.sdm import INTERVALS_PER_MODE_PERIOD, MIN_INTERVALS, choose_intervals
+
+    model = cutting_state_space(BENCH)
+    assert model.mode_frequency == pytest.approx(WN, rel=1e-12)
+    period = 60.0 / (2 * np.geomspace(1000.0, 100000.0, 30))
+    m = choose_intervals(model, period)
+    need = INTERVALS_PER_MODE_PERIOD * period * 922.0
+    assert np.all(m >= np.maximum(need, MIN_INTERVALS))
+    assert np.all(m < np.maximum(math.sqrt(2) * need, MIN_INTERVALS) + 2)  # one ladder step
+    # a second, 20 times stiffer mode with a tiny resonance does not count
+    weak = modal_compliance([Mode(WN, ZETA, MASS * WN**2), Mode(20 * WN, 0.05, 1e12)])
+    assert cutting_state_space(weak).mode_frequency == pytest.approx(WN, rel=1e-9)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from servotune.friction import equivalent
-from servotune.friction.lugre import BIANCHI2014, LuGreParameters
+from servotune.friction.lugre import BIANCHI2014, LuGreParameters, lugre_cycle
 
 W20 = 2 * math.pi * 20.0
 
@@ -204,3 +204,51 @@ def test_describing_function_with_micro_damping_limits():
     ceq, _ = equivalent.describing_function(p, big, omega, n_steps=4096)
     coulomb = 4 * p.fc / (math.pi * omega * big) + p.sigma2
     assert_allclose(ceq, coulomb, rtol=0.02)
+
+
+# the default steps per period, against an independent stiff solution (Radau at rtol 1e-10,
+# shooting for the periodic state; tests/test_friction_lugre.py): cases from the convergence
+# study of describing_function, the worst one (a 1 mm stroke at 30 Hz, 19 vs) included
+DEFAULT_CASES = [
+    (BIANCHI2014, 2e-6, 20.0),
+    (BIANCHI2014, 1e-3, 30.0),
+    (LuGreParameters.named("canudas1995"), 1e-3, 100.0),
+    (dataclasses.replace(BIANCHI2014, sigma1_decay_speed=1e-3), 20e-6, 200.0),
+]
+
+
+@pytest.mark.parametrize("p, amplitude, f_hz", DEFAULT_CASES)
+def test_describing_function_at_its_default_steps_against_radau(p, amplitude, f_hz):
+    from test_friction_lugre import periodic_reference
+
+    omega = 2 * math.pi * f_hz
+    energy, keq_ref = periodic_reference(p, amplitude, omega)
+    ceq_ref = energy / (math.pi * omega * amplitude**2)
+    ceq, keq = equivalent.describing_function(p, amplitude, omega)
+    n_ref = keq_ref + 1j * omega * ceq_ref
+    # the documented accuracy of the default: N = Keq + j w Ceq within 1e-4, Ceq within 1e-6
+    assert abs(keq + 1j * omega * ceq - n_ref) / abs(n_ref) < 1e-4
+    assert_allclose(ceq, ceq_ref, rtol=1e-6)
+
+
+@pytest.mark.parametrize("p, amplitude, f_hz", DEFAULT_CASES)
+def test_half_period_with_graded_steps_agrees_with_the_full_uniform_cycle(p, amplitude, f_hz):
+    # two discretisations of the same periodic state (half a period with graded steps, the
+    # full period with uniform ones) converge to the same describing function
+    omega = 2 * math.pi * f_hz
+    ceq, keq = equivalent.describing_function(p, amplitude, omega, n_steps=16384)
+    cycle = lugre_cycle(p, amplitude, omega, n_steps=16384)
+    n_ref = cycle.keq + 1j * omega * cycle.ceq
+    assert abs(keq + 1j * omega * ceq - n_ref) / abs(n_ref) < 1e-7
+    assert_allclose(ceq, cycle.ceq, rtol=1e-8)
+
+
+@pytest.mark.parametrize("amplitude, f_hz", [(5e-6, 20.0), (1e-3, 30.0)])
+def test_graded_steps_converge_at_fourth_order(amplitude, f_hz):
+    omega = 2 * math.pi * f_hz
+    # (the fast stroke is pre-asymptotic below 256 steps)
+    fine = equivalent.describing_function(BIANCHI2014, amplitude, omega, n_steps=16384)[0]
+    err = np.array([abs(equivalent.describing_function(BIANCHI2014, amplitude, omega,
+                                                       n_steps=n)[0] - fine)
+                    for n in (256, 512, 1024)])
+    assert np.all(np.log2(err[:-1] / err[1:]) > 3.5), err

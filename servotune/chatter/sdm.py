@@ -55,6 +55,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 from scipy import linalg, optimize
+from scipy.sparse import linalg as sparse_linalg
 
 from .frf import _check_stable
 from .setup import MillingSetup, _direction_index, periodic_directional_matrix
@@ -68,19 +69,37 @@ from .zoa import (
 
 __all__ = [
     "DEFAULT_INTERVALS",
+    "MIN_INTERVALS",
+    "INTERVALS_PER_MODE_PERIOD",
     "CuttingStateSpace",
+    "SdmLobes",
     "StabilityMap",
+    "choose_intervals",
     "cutting_state_space",
     "monodromy_spectral_radius",
     "sdm_lobes",
     "stability_map",
 ]
 
-#: intervals per tooth period used when none are given (see tests/test_chatter_sdm.py for the
-#: convergence behind this choice)
-DEFAULT_INTERVALS = 40
+#: intervals per tooth period when none are given: chosen per speed (:func:`choose_intervals`),
+#: and for the lobes refined until the estimated error of b_lim is below 1 % (:func:`sdm_lobes`)
+DEFAULT_INTERVALS = None
+#: the fewest intervals per tooth period the automatic choice uses
+MIN_INTERVALS = 40
+#: intervals per period of the highest significant mode in the automatic choice: the error of
+#: b_lim was measured up to 6.2 (T f / m)^2 (benchmarks/README.md), so 30 per mode period keep
+#: it below 1 % where the convergence is of second order (sdm_lobes checks and refines)
+INTERVALS_PER_MODE_PERIOD = 30
+#: the automatic refinement stops at this many intervals per tooth period
+_MAX_INTERVALS = 4096
+#: the automatic choice takes m from this ladder (steps of sqrt 2 from MIN_INTERVALS)
+_LADDER = np.unique(np.round(MIN_INTERVALS * 2.0 ** (np.arange(16) / 2.0) / 2.0).astype(int) * 2)
 #: matrices per batch of matrix exponentials (bounds the memory of one batch to ~ 50 MB)
 _BATCH = 200_000
+#: monodromy matrices per batch bounded to this many elements (~40 MB)
+_BATCH_ELEMENTS = 5_000_000
+#: from this size of the monodromy matrix on, its largest eigenvalues come from ARPACK
+_ARNOLDI_SIZE = 90
 
 _PADE13 = np.array([64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
                     1187353796428800.0, 129060195264000.0, 10559470521600.0, 670442572800.0,
@@ -125,12 +144,17 @@ class CuttingStateSpace:
         Output matrix to the displacements [m] in the flexible directions.
     directions : tuple of int
         The flexible directions (0 = x, 1 = y); rigid ones are left out of the state.
+    mode_frequency : float
+        Natural frequency [rad/s] of the highest significant mode: the largest |lambda| among
+        the eigenvalues whose resonance (residue over |Re lambda|) reaches 1 % of the largest
+        one's (what :func:`choose_intervals` resolves).
     """
 
     a: np.ndarray
     b: np.ndarray
     c: np.ndarray
     directions: tuple[int, ...]
+    mode_frequency: float = math.nan
 
 
 def cutting_state_space(system, direction: str = "x") -> CuttingStateSpace:
@@ -174,12 +198,56 @@ def cutting_state_space(system, direction: str = "x") -> CuttingStateSpace:
     if not directions:
         raise ValueError("the compliance is zero in both directions")
     scale = linalg.matrix_balance(a, permute=False, separate=True)[1][0]
-    return CuttingStateSpace(a=a * scale[None, :] / scale[:, None], b=b / scale[:, None],
-                             c=c * scale[None, :], directions=directions)
+    a, b, c = a * scale[None, :] / scale[:, None], b / scale[:, None], c * scale[None, :]
+    return CuttingStateSpace(a=a, b=b, c=c, directions=directions,
+                             mode_frequency=_highest_significant_mode(a, b, c))
+
+
+def _highest_significant_mode(a, b, c) -> float:
+    """The largest |lambda| [rad/s] among the eigenvalues whose resonance height, the norm of
+    the residue C v w^T B over |Re lambda|, is at least 1 % of the largest one."""
+    lam, v = np.linalg.eig(a)
+    try:
+        w = np.linalg.inv(v)
+    except np.linalg.LinAlgError:
+        return float(np.abs(lam).max())
+    residue = np.abs(c @ v).max(axis=0) * np.abs(w @ b).max(axis=1)
+    height = residue / np.maximum(np.abs(lam.real), 1e-12 * np.abs(lam))
+    if not np.all(np.isfinite(height)):
+        return float(np.abs(lam).max())
+    return float(np.abs(lam[height >= 1e-2 * height.max()]).max())
+
+
+def choose_intervals(model: CuttingStateSpace, period) -> np.ndarray:
+    """Intervals per tooth period for the semi-discretisation at each tooth period [s].
+
+    ``m >= max(MIN_INTERVALS, INTERVALS_PER_MODE_PERIOD T f)`` with f = ``model.mode_frequency``
+    / 2 pi, the highest significant mode, rounded up on a ladder of steps of sqrt 2 from
+    MIN_INTERVALS (so that speeds share matrices). The first-order semi-discretisation
+    interpolates the delayed displacement linearly over T/m; its error in b_lim was measured
+    to fall as K (T f / m)^2 with K up to 6.2 (benchmarks/README.md), which this keeps below
+    1 %; :func:`sdm_lobes` checks it and refines further where the convergence is slower.
+
+    Examples
+    --------
+    The Insperger-Stepan benchmark (922 Hz) at 3,000 rpm with two teeth spans 9.2 periods of
+    its mode per tooth period:
+
+    >>> from servotune.chatter import Mode, modal_compliance
+    >>> wn = 2 * math.pi * 922.0
+    >>> model = cutting_state_space(modal_compliance([Mode(wn, 0.011, 0.03993 * wn**2)]))
+    >>> choose_intervals(model, [60 / (2 * 3000.0), 60 / (2 * 30000.0)]).tolist()
+    [320, 40]
+    """
+    period = np.asarray(period, dtype=float)
+    need = INTERVALS_PER_MODE_PERIOD * period * model.mode_frequency / (2.0 * math.pi)
+    need = np.maximum(np.nan_to_num(need, nan=0.0), MIN_INTERVALS)
+    return _LADDER[np.minimum(np.searchsorted(_LADDER, need), _LADDER.size - 1)]
 
 
 def _check_intervals(intervals) -> int:
-    if isinstance(intervals, bool) or int(intervals) != intervals or intervals < 2:
+    if (isinstance(intervals, bool) or not isinstance(intervals, int | np.integer | float)
+            or int(intervals) != intervals or intervals < 2):
         raise ValueError(f"intervals (per tooth period) must be a whole number >= 2, "
                          f"got {intervals!r}")
     return int(intervals)
@@ -237,7 +305,8 @@ def monodromy_spectral_radius(model: CuttingStateSpace, h, period, depth,
     if np.any(~np.isfinite(depth)) or np.any(depth < 0.0):
         raise ValueError("depth must be finite and >= 0 [m]")
     m = h.shape[0]
-    points_per_batch = max(1, _BATCH // m)
+    size = model.a.shape[0] + m * r
+    points_per_batch = max(1, min(_BATCH // m, _BATCH_ELEMENTS // (size * size)))
     radius = np.empty(period.size)
     multiplier = np.empty(period.size, dtype=complex)
     for start in range(0, period.size, points_per_batch):
@@ -284,10 +353,31 @@ def _monodromy_batch(model, h, period, depth):
             x_next[:, :, :n] += r1[:, i] @ c
         x = x_next
     phi = np.concatenate([x, *rows[::-1]], axis=1)               # (p, size, size)
-    eig = np.linalg.eigvals(phi)
-    j = np.argmax(np.abs(eig), axis=1)
-    critical = eig[np.arange(p), j]
+    critical = _critical_multipliers(phi)
     return np.abs(critical), critical
+
+
+def _critical_multipliers(phi: np.ndarray) -> np.ndarray:
+    """The eigenvalue of largest modulus of each matrix of a stack (p, N, N).
+
+    Small matrices: all eigenvalues at once (LAPACK). From N = _ARNOLDI_SIZE on, where the
+    history of many intervals makes the dense eigenvalue problem costly (O(N^3)), the few
+    largest by implicitly restarted Arnoldi (ARPACK, scipy.sparse.linalg.eigs), with the dense
+    solution as the fallback where it does not converge.
+    """
+    p, size = phi.shape[0], phi.shape[1]
+    if size < _ARNOLDI_SIZE:
+        eig = np.linalg.eigvals(phi)
+        return eig[np.arange(p), np.argmax(np.abs(eig), axis=1)]
+    out = np.empty(p, dtype=complex)
+    for k in range(p):
+        try:
+            eig = sparse_linalg.eigs(phi[k], k=4, which="LM", return_eigenvectors=False,
+                                     tol=1e-12, ncv=min(size - 1, 24))
+        except (sparse_linalg.ArpackNoConvergence, sparse_linalg.ArpackError):
+            eig = np.linalg.eigvals(phi[k])
+        out[k] = eig[np.argmax(np.abs(eig))]
+    return out
 
 
 def _tooth_period(setup: MillingSetup, speed_rpm) -> np.ndarray:
@@ -316,7 +406,9 @@ class StabilityMap:
     multiplier : numpy.ndarray (ns, nd) of complex
         The critical multiplier (near -1 at a flip boundary, a complex pair at a Hopf one).
     intervals : int
-        Intervals per tooth period.
+        Intervals per tooth period (the largest used).
+    intervals_by_speed : numpy.ndarray of int (ns,)
+        Intervals per tooth period at each speed.
     """
 
     setup: MillingSetup
@@ -325,6 +417,7 @@ class StabilityMap:
     spectral_radius: np.ndarray
     multiplier: np.ndarray
     intervals: int
+    intervals_by_speed: np.ndarray | None = None
 
     @property
     def stable(self) -> np.ndarray:
@@ -333,7 +426,10 @@ class StabilityMap:
 
     def to_dict(self) -> dict:
         """JSON-ready dictionary (SI; speeds in rpm)."""
+        by_speed = (None if self.intervals_by_speed is None
+                    else np.asarray(self.intervals_by_speed).tolist())
         return {"method": "sdm", "setup": self.setup.to_dict(), "intervals": self.intervals,
+                "intervals_by_speed": by_speed,
                 "speed_rpm": self.speed_rpm.tolist(), "depth_m": self.depth.tolist(),
                 "spectral_radius": self.spectral_radius.tolist()}
 
@@ -345,8 +441,16 @@ class StabilityMap:
         return plots.plot_stability_map(self, **kwargs)
 
 
+def _intervals_for(model, setup, speeds, intervals) -> np.ndarray:
+    """Intervals per tooth period at each speed: given, or :func:`choose_intervals`."""
+    if intervals is None:
+        return choose_intervals(model, _tooth_period(setup, speeds))
+    return np.full(np.shape(speeds), _check_intervals(intervals), dtype=int)
+
+
 def stability_map(system, setup: MillingSetup, speeds_rpm, depths, *,
-                  intervals: int = DEFAULT_INTERVALS, direction: str = "x") -> StabilityMap:
+                  intervals: int | None = DEFAULT_INTERVALS,
+                  direction: str = "x") -> StabilityMap:
     """Semi-discretisation over a grid of spindle speeds and depths of cut.
 
     Parameters
@@ -358,8 +462,10 @@ def stability_map(system, setup: MillingSetup, speeds_rpm, depths, *,
         Ascending spindle speeds [rpm].
     depths : array_like
         Axial depths of cut [m], >= 0.
-    intervals : int
-        Intervals m per tooth period (>= 2); the error falls roughly as 1/m^2.
+    intervals : int, optional
+        Intervals m per tooth period (>= 2); the error falls roughly as 1/m^2. Default: chosen
+        per speed from the tooth period and the highest significant mode
+        (:func:`choose_intervals`).
     direction : {"x", "y"}
         Flexible direction of a SISO compliance.
 
@@ -387,13 +493,18 @@ def stability_map(system, setup: MillingSetup, speeds_rpm, depths, *,
     depths = np.atleast_1d(np.asarray(depths, dtype=float))
     if depths.ndim != 1 or np.any(~np.isfinite(depths)) or np.any(depths < 0.0):
         raise ValueError("depths must be a 1-D array of finite depths >= 0 [m]")
-    m = _check_intervals(intervals)
     model = cutting_state_space(system, direction)
-    h = periodic_directional_matrix(setup, m)
-    rho, mult = monodromy_spectral_radius(model, h, _tooth_period(setup, speeds)[:, None],
-                                          depths[None, :], return_multiplier=True)
+    m_by = _intervals_for(model, setup, speeds, intervals)
+    rho = np.empty((speeds.size, depths.size))
+    mult = np.empty((speeds.size, depths.size), dtype=complex)
+    for m in np.unique(m_by):
+        sel = m_by == m
+        h = periodic_directional_matrix(setup, int(m))
+        rho[sel], mult[sel] = monodromy_spectral_radius(
+            model, h, _tooth_period(setup, speeds[sel])[:, None], depths[None, :],
+            return_multiplier=True)
     return StabilityMap(setup=setup, speed_rpm=speeds, depth=depths, spectral_radius=rho,
-                        multiplier=mult, intervals=m)
+                        multiplier=mult, intervals=int(m_by.max()), intervals_by_speed=m_by)
 
 
 def _limit_depths(model, h, period, depth_max, scan, tol):
@@ -418,9 +529,57 @@ def _limit_depths(model, h, period, depth_max, scan, tol):
     return out
 
 
+@dataclass(frozen=True)
+class SdmLobes(StabilityLobes):
+    """:class:`~servotune.chatter.zoa.StabilityLobes` of the semi-discretisation, with the
+    intervals used at each speed and the estimated error of b_lim.
+
+    Attributes
+    ----------
+    intervals_by_speed : numpy.ndarray of int
+        Intervals per tooth period at each speed (``intervals`` is the largest).
+    error_estimate : numpy.ndarray
+        Estimated relative error of b_lim at each speed (NaN where not estimated: fixed
+        intervals given), from the change of b_lim over the last refinement.
+    max_error_estimate : float
+        The largest of them over the speeds with a finite limit (NaN if none was estimated).
+    """
+
+    intervals_by_speed: np.ndarray | None = None
+    error_estimate: np.ndarray | None = None
+    max_error_estimate: float = math.nan
+
+    def to_dict(self) -> dict:
+        out = super().to_dict()
+        out["intervals_by_speed"] = (None if self.intervals_by_speed is None
+                                     else np.asarray(self.intervals_by_speed).tolist())
+        out["max_error_estimate"] = (self.max_error_estimate
+                                     if math.isfinite(self.max_error_estimate) else None)
+        return out
+
+
+def _limits_by_intervals(model, setup, periods, m_by, depth_max, scan, tol):
+    """b_lim at each period with its own number of intervals (grouped by m)."""
+    out = np.empty(periods.size)
+    for m in np.unique(m_by):
+        sel = m_by == m
+        out[sel] = _limit_depths(model, periodic_directional_matrix(setup, int(m)),
+                                 periods[sel], depth_max, scan, tol)
+    return out
+
+
+def _relative_change(fine, coarse):
+    """Estimated relative error of ``fine`` (m intervals) from ``coarse`` (m / 2), at first
+    order (see :func:`sdm_lobes`)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        change = np.abs(coarse - fine) / fine
+    both_inf = ~np.isfinite(fine) & ~np.isfinite(coarse)
+    return np.where(both_inf, 0.0, np.where(np.isnan(change), np.inf, change))
+
+
 def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | None = None,
-              *, intervals: int = DEFAULT_INTERVALS, direction: str = "x", scan: int = 16,
-              tol: float = 1e-4) -> StabilityLobes:
+              *, intervals: int | None = DEFAULT_INTERVALS, direction: str = "x",
+              scan: int = 16, tol: float = 1e-4, rtol: float = 0.01) -> SdmLobes:
     """Stability limit b_lim(n) by semi-discretisation: the lowest depth that is unstable.
 
     At each speed the spectral radius is scanned on ``scan`` equal depth steps up to
@@ -428,9 +587,20 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     smallest limit over the speed grid is then refined by a bounded search over speed between
     the neighbouring grid speeds.
 
+    By default the number of intervals per tooth period is chosen per speed
+    (:func:`choose_intervals`) and checked: b_lim is computed also with half the intervals,
+    and the change between the two estimates the error of the finer one (Richardson: for
+    convergence at order p the error of b(m) is ``|b(m/2) - b(m)| / (2^p - 1)``). The method
+    converges at second order where the cut is long (full slot) but more slowly and less
+    regularly at low immersion, where the tooth enters and leaves inside an interval (order
+    1.35 measured at a/D = 0.05, benchmarks/README.md; b(m) then wanders with m), so the
+    estimate takes p = 1, the change itself. Where it exceeds ``rtol`` the intervals are
+    doubled and the estimate taken again, until it does not (or m reaches 4096). The
+    estimates are returned; they are estimates, not bounds.
+
     Parameters
     ----------
-    system, setup, intervals, direction
+    system, setup, direction
         As for :func:`stability_map`.
     speeds_rpm : array_like, optional
         Ascending spindle speeds [rpm]; default 200 speeds over
@@ -438,16 +608,22 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     depth_max : float, optional
         Deepest cut examined [m]; speeds stable up to it get ``inf``. Default five times the
         zero-order b_crit.
+    intervals : int, optional
+        Intervals per tooth period (>= 2) at every speed, without the check; default
+        automatic, as above.
     scan : int
         Depth steps of the initial scan (an unstable island thinner than depth_max/scan
         below the first boundary could be missed).
     tol : float
         Bisection tolerance relative to depth_max.
+    rtol : float
+        Relative error of b_lim allowed by the automatic choice of intervals (default 1 %).
 
     Returns
     -------
-    StabilityLobes
-        ``method="sdm"``; ``chatter_frequency`` is NaN (not computed).
+    SdmLobes
+        ``method="sdm"``; ``chatter_frequency`` is NaN (not computed); the intervals and the
+        error estimate at each speed.
 
     Examples
     --------
@@ -458,9 +634,9 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     >>> wn = 2 * math.pi * 922.0
     >>> sys = modal_compliance([Mode(wn, 0.011, 0.03993 * wn**2)])
     >>> r = sdm_lobes(sys, MillingSetup(teeth=2, kt=6e8, kn=2e8),
-    ...               np.linspace(14000, 18000, 9), 1e-3, intervals=40)
-    >>> round(r.b_crit / 0.29805e-3, 2)
-    1.07
+    ...               np.linspace(14000, 18000, 9), 1e-3)
+    >>> round(r.b_crit / 0.29805e-3, 2), bool(r.max_error_estimate < 0.01)
+    (1.07, True)
     """
     setup = _check_setup(setup)
     _warn_helix(setup)
@@ -477,12 +653,29 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
         raise ValueError(f"scan must be a whole number >= 2, got {scan!r}")
     if not 0.0 < tol < 0.1:
         raise ValueError(f"tol must lie in (0, 0.1), got {tol!r}")
-    m = _check_intervals(intervals)
-    h = periodic_directional_matrix(setup, m)
-    limit = _limit_depths(model, h, _tooth_period(setup, speeds), depth_max, int(scan), tol)
+    if not 0.0 < rtol < 1.0:
+        raise ValueError(f"rtol must lie in (0, 1), got {rtol!r}")
+    periods = _tooth_period(setup, speeds)
+    m_by = _intervals_for(model, setup, speeds, intervals)
+    limit = _limits_by_intervals(model, setup, periods, m_by, depth_max, int(scan), tol)
+    error = np.full(speeds.size, np.nan)
+    if intervals is None:
+        coarse = _limits_by_intervals(model, setup, periods, m_by // 2, depth_max, int(scan),
+                                      tol)
+        error = _relative_change(limit, coarse)
+        todo = np.flatnonzero((error > rtol) & (m_by < _MAX_INTERVALS))
+        while todo.size:
+            m_by[todo] *= 2
+            finer = _limits_by_intervals(model, setup, periods[todo], m_by[todo], depth_max,
+                                         int(scan), tol)
+            error[todo] = _relative_change(finer, limit[todo])
+            limit[todo] = finer
+            todo = todo[(error[todo] > rtol) & (m_by[todo] < _MAX_INTERVALS)]
     i = int(np.argmin(limit))
     b_min, n_min = float(limit[i]), float(speeds[i])
     if math.isfinite(b_min) and 0 < i < speeds.size - 1:
+        h = periodic_directional_matrix(setup, int(m_by[i]))
+
         def at(n):
             return float(_limit_depths(model, h, _tooth_period(setup, np.array([n])),
                                        depth_max, int(scan), tol)[0])
@@ -491,9 +684,12 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
                                        options={"xatol": 1e-6 * speeds[i], "maxiter": 40})
         if res.fun < b_min:
             b_min, n_min = float(res.fun), float(res.x)
-    return StabilityLobes(
+    finite = np.isfinite(limit) & np.isfinite(error)
+    return SdmLobes(
         setup=setup, method="sdm", speed_rpm=speeds, depth_limit=limit,
         chatter_frequency=np.full(speeds.size, np.nan), b_crit=b_min,
         critical_speed_rpm=n_min, critical_frequency=math.nan, min_depth_limit=b_min,
         lobe_speed_rpm=np.empty((0, 0)), lobe_depth=np.empty((0, 0)), lobe_count=0,
-        depth_ceiling=depth_max, intervals=m)
+        depth_ceiling=depth_max, intervals=int(m_by.max()), intervals_by_speed=m_by,
+        error_estimate=error,
+        max_error_estimate=float(error[finite].max()) if finite.any() else math.nan)

@@ -23,10 +23,16 @@ microseconds on the pads; r holds what is left of the LuGre law, stiff while the
   Newton's method on a system of that size (the pads couple only through their outputs v_p,
   z_p), so a step costs O(n n_r), not O(n^2) or O(n^3). For the nonlinear part the scheme is
   the 2-stage Radau IIA collocation: L-stable (the sliding bristles relax in one step without
-  ringing) and stiffly accurate.
+  ringing) and stiffly accurate. Newton starts from the line through the previous step's
+  stage values and stops when its update, or the error left after it as estimated from the
+  contraction of the updates, is below the Newton tolerance (Hairer and Wanner, sec IV.8).
 * A step whose Newton iteration does not converge (e.g. at a violent break-away) is redone as
-  two half steps, recursively down to 1/64 of the step; below that the integration stops with
+  two half steps, recursively down to 1/256 of the step; below that the integration stops with
   :class:`SimulationError`.
+* Every matrix-vector product of the step (known inputs onto the modes, modes onto the pad
+  outputs, the powers and the recorded outputs) runs with its long loop innermost over
+  transposed matrices, which the compiler vectorises without reordering any sum: the results
+  do not depend on how the kernel was compiled.
 
 The energies are integrated alongside: the power of the work-piece forces, of the motor torque,
 of the friction and of the distributed damping is evaluated at every step end and accumulated by
@@ -80,7 +86,7 @@ def phi_functions(z, order: int = 4) -> np.ndarray:
     0.02
     """
     z = np.asarray(z, dtype=complex)
-    out = np.empty(z.shape + (order,), dtype=complex)
+    out = np.empty((*z.shape, order), dtype=complex)
     small = np.abs(z) < 1.0
     zs = z[small]
     for k in range(1, order + 1):
@@ -230,7 +236,7 @@ def _u_into(samples, s, out):
     else the cubic through the four samples around s."""
     n = samples.shape[0]
     nu = samples.shape[1]
-    i = int(math.floor(s))
+    i = int(math.floor(s))  # noqa: RUF046 (an integer in the compiled kernel too)
     if s == i and 0 <= i < n:
         for c in range(nu):
             out[c] = samples[i, c]
@@ -296,14 +302,23 @@ def sum_of_squares(rows_re, rows_im, xr, xm):
 
 
 @numba.njit(cache=True, fastmath=_FAST)
-def _powers(xr, xm, u, r2, cp_re, cp_im, dpu, dpr, n_force, force_idx, n_pads, vals, out):
-    """Powers [W] at one instant: work-piece forces, motor, friction, damping."""
-    npr = cp_re.shape[0]
+def _powers(xr, xm, u, r2, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads, vals, out):
+    """Powers [W] at one instant: work-piece forces, motor, friction, damping.
+
+    ``cpt`` (m, rows) is the transposed map from the modal coordinates to the power rows: the
+    loop over the rows is innermost and vectorises, each row summed over the modes in order.
+    """
+    npr = cpt_re.shape[1]
     m = xr.size
     for q in range(npr):
-        acc = 0.0
-        for i in range(m):
-            acc += cp_re[q, i] * xr[i] - cp_im[q, i] * xm[i]
+        vals[q] = 0.0
+    for i in range(m):
+        a = xr[i]
+        b = xm[i]
+        for q in range(npr):
+            vals[q] += cpt_re[i, q] * a - cpt_im[i, q] * b
+    for q in range(npr):
+        acc = vals[q]
         for c in range(u.size):
             acc += dpu[q, c] * u[c]
         for p in range(r2.size):
@@ -327,10 +342,10 @@ def _powers(xr, xm, u, r2, cp_re, cp_im, dpu, dpr, n_force, force_idx, n_pads, v
 
 @numba.njit(cache=True, fastmath=_FAST)
 def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
-                    bu_re, bu_im, br_re, br_im, cy_re, cy_im, prop_re, prop_im, alpha_re,
+                    but_re, but_im, brt_re, brt_im, cyt_re, cyt_im, prop_re, prop_im, alpha_re,
                     alpha_im, beta_re, beta_im, kmat, kerr, law, rparams, r_tol,
-                    err_scale, tol, cp_re, cp_im, dpu, dpr, n_force, force_idx, n_pads,
-                    co_re, co_im, dou, dor, rec_out, rec_energy, stats):
+                    err_scale, tol, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads,
+                    cot_re, cot_im, dou, dor, rec_out, rec_energy, stats):
     """Integrate the base steps n0..n1-1 (of length h) in place.
 
     State: modal coordinates ``xr + i xm``, the last stage remainders ``r_last`` (2 n_r),
@@ -339,12 +354,17 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
     base step n with (n + 1) % record_every == 0. ``stats``: [steps, Newton iterations,
     rejected steps, deepest level].
 
+    The projections are passed transposed, ``but = (V^-1 B_u)^T`` (nu, m), ``brt`` (n_r, m),
+    ``cyt = (C_y V)^T`` (m, 2 n_r), ``cpt`` and ``cot`` (m, rows): every matrix-vector product
+    then runs with the loop over the modes (or the rows) innermost, which the compiler
+    vectorises without reordering any sum.
+
     Returns (base steps completed, level): fewer steps than asked means a step failed at the
     deepest level.
     """
     m = xr.size
     nu = samples.shape[1]
-    nr = br_re.shape[1]
+    nr = brt_re.shape[0]
     ny = 2 * nr
     nlev = prop_re.shape[0]
     top = nlev - 1
@@ -364,9 +384,11 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
     dz = np.empty(2 * nr)
     d2 = np.empty(nr)
     u_end = np.empty(nu)
-    vals = np.empty(cp_re.shape[0])
+    vals = np.empty(cpt_re.shape[1])
+    n_out = cot_re.shape[1]
     p_new = np.empty(4)
     n_rec = 0
+    prev_lev = -1                       # level of the previous step (-1: none in this chunk)
     pos = n0 * unit
     end = n1 * unit
     while pos < end:
@@ -378,40 +400,50 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
         for k in range(4):
             _u_into(samples, s0 + k * ds, un[k])
             for i in range(m):
-                acc_r = 0.0
-                acc_i = 0.0
-                for c in range(nu):
-                    acc_r += bu_re[i, c] * un[k, c]
-                    acc_i += bu_im[i, c] * un[k, c]
-                bun_re[k, i] = acc_r
-                bun_im[k, i] = acc_i
+                bun_re[k, i] = 0.0
+                bun_im[k, i] = 0.0
+            for c in range(nu):
+                w = un[k, c]
+                for i in range(m):
+                    bun_re[k, i] += but_re[c, i] * w
+                    bun_im[k, i] += but_im[c, i] * w
         for st in range(2):
             for i in range(m):
                 pr = prop_re[lev, st, i]
                 pi = prop_im[lev, st, i]
-                ar = pr * xr[i] - pi * xm[i]
-                ai = pr * xm[i] + pi * xr[i]
-                for k in range(4):
+                base_re[st, i] = pr * xr[i] - pi * xm[i]
+                base_im[st, i] = pr * xm[i] + pi * xr[i]
+            for k in range(4):
+                for i in range(m):
                     wr = beta_re[lev, st, k, i]
                     wi = beta_im[lev, st, k, i]
-                    ar += wr * bun_re[k, i] - wi * bun_im[k, i]
-                    ai += wr * bun_im[k, i] + wi * bun_re[k, i]
-                base_re[st, i] = ar
-                base_im[st, i] = ai
+                    base_re[st, i] += wr * bun_re[k, i] - wi * bun_im[k, i]
+                    base_im[st, i] += wr * bun_im[k, i] + wi * bun_re[k, i]
         ok = True
         its = 0
         err = 0.0
         if nr > 0:
             for st in range(2):
                 for q in range(ny):
-                    acc = 0.0
-                    for i in range(m):
-                        acc += cy_re[q, i] * base_re[st, i] - cy_im[q, i] * base_im[st, i]
-                    ypred[st, q] = acc
-            for p in range(nr):           # start from the last value of r
-                rr[p] = r_last[nr + p]
-                rr[nr + p] = r_last[nr + p]
+                    ypred[st, q] = 0.0
+                for i in range(m):
+                    a = base_re[st, i]
+                    b = base_im[st, i]
+                    for q in range(ny):
+                        ypred[st, q] += cyt_re[i, q] * a - cyt_im[i, q] * b
+            if prev_lev >= 0:
+                # start from the line through the previous step's stage values, extended
+                ratio = 1.5 * (1 << prev_lev) / (1 << lev)   # h / ((1 - c1) h_prev)
+                for p in range(nr):
+                    slope = (r_last[nr + p] - r_last[p]) * ratio
+                    rr[p] = r_last[nr + p] + C1 * slope
+                    rr[nr + p] = r_last[nr + p] + slope
+            else:
+                for p in range(nr):       # (first step of a chunk) from the last value of r
+                    rr[p] = r_last[nr + p]
+                    rr[nr + p] = r_last[nr + p]
             ok = False
+            big_prev = 0.0
             while its < MAX_NEWTON:
                 its += 1
                 for st in range(2):
@@ -449,9 +481,14 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
                     big = max(big, abs(res[q]))
                 if not finite:
                     break
-                if big <= r_tol:
+                # converged when the update, or the error left after it as estimated from
+                # the contraction theta = big / big_prev (theta / (1 - theta) big), is below
+                # r_tol (Hairer and Wanner, sec IV.8)
+                if big <= r_tol or (its > 1 and big < big_prev
+                                    and big * big <= r_tol * (big_prev - big)):
                     ok = True
                     break
+                big_prev = big
             if ok:
                 # error estimate: r minus its line, propagated to the pad outputs
                 for p in range(nr):
@@ -471,26 +508,26 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
             continue
         # accept: the new state
         for i in range(m):
-            ar = base_re[1, i]
-            ai = base_im[1, i]
-            for sj in range(2):
-                wr = alpha_re[lev, 1, sj, i]
-                wi = alpha_im[lev, 1, sj, i]
-                for p in range(nr):
-                    g = rr[sj * nr + p]
-                    ar += (wr * br_re[i, p] - wi * br_im[i, p]) * g
-                    ai += (wr * br_im[i, p] + wi * br_re[i, p]) * g
-            xr[i] = ar
-            xm[i] = ai
+            xr[i] = base_re[1, i]
+            xm[i] = base_im[1, i]
+        for sj in range(2):
+            for p in range(nr):
+                g = rr[sj * nr + p]
+                for i in range(m):
+                    wr = alpha_re[lev, 1, sj, i]
+                    wi = alpha_im[lev, 1, sj, i]
+                    xr[i] += (wr * brt_re[p, i] - wi * brt_im[p, i]) * g
+                    xm[i] += (wr * brt_im[p, i] + wi * brt_re[p, i]) * g
         for q in range(2 * nr):
             r_last[q] = rr[q]
+        prev_lev = lev
         stats[0] += 1
         if lev > stats[3]:
             stats[3] = lev
         pos += span
         for c in range(nu):
             u_end[c] = un[3, c]
-        _powers(xr, xm, u_end, r_last[nr:], cp_re, cp_im, dpu, dpr, n_force, force_idx,
+        _powers(xr, xm, u_end, r_last[nr:], cpt_re, cpt_im, dpu, dpr, n_force, force_idx,
                 n_pads, vals, p_new)
         dt = h / (1 << lev)
         for q in range(4):
@@ -502,15 +539,21 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
         if pos % unit == 0:
             n = pos // unit - 1
             if (n + 1) % record_every == 0:
-                for q in range(co_re.shape[0]):
-                    acc = 0.0
-                    for i in range(m):
-                        acc += co_re[q, i] * xr[i] - co_im[q, i] * xm[i]
+                row = rec_out[n_rec]
+                for q in range(n_out):
+                    row[q] = 0.0
+                for i in range(m):
+                    a = xr[i]
+                    b = xm[i]
+                    for q in range(n_out):
+                        row[q] += cot_re[i, q] * a - cot_im[i, q] * b
+                for q in range(n_out):
+                    acc = row[q]
                     for c in range(nu):
                         acc += dou[q, c] * u_end[c]
                     for p in range(nr):
                         acc += dor[q, p] * r_last[nr + p]
-                    rec_out[n_rec, q] = acc
+                    row[q] = acc
                 for q in range(4):
                     rec_energy[n_rec, q] = energy[q]
                 n_rec += 1
