@@ -136,9 +136,11 @@ def fast_frequency_response(sys: control.StateSpace, omega, inputs=None, outputs
     d = sys.D[np.ix_(i_out, i_in)]
     if a.shape[0]:
         # balancing (a diagonal similarity) equalises the scales of the states (displacements
-        # in m, currents in A, integrals ...), which the accuracy of every form needs
-        a, t = scipy.linalg.matrix_balance(a, permute=False, separate=True)
-        t = t[0]
+        # in m, currents in A, integrals ...), which the accuracy of every form needs; it is
+        # done on the system matrix [[A, B], [C, 0]] (as SLICOT's TB01ID), not on A alone,
+        # which can scale a state that only an input reaches by 1e20 and ruin B
+        t = _system_balance(a, b, c)
+        a = a * (1.0 / t)[:, None] * t[None, :]
         resp = _state_space_response(a, b / t[:, None], c * t[None, :], omega, rtol)
     else:
         resp = np.zeros((len(i_out), len(i_in), omega.size), dtype=complex)
@@ -148,6 +150,19 @@ def fast_frequency_response(sys: control.StateSpace, omega, inputs=None, outputs
 
 
 _EPS = float(np.finfo(float).eps)
+
+
+def _system_balance(a, b, c) -> np.ndarray:
+    """Scales t of the states that balance the system matrix ``[[A, B], [C, 0]]`` (padded to a
+    square), powers of 2 (so that scaling is exact): A -> T^-1 A T, B -> T^-1 B, C -> C T."""
+    n, m, p = a.shape[0], b.shape[1], c.shape[0]
+    k = max(m, p)
+    z = np.zeros((n + k, n + k))
+    z[:n, :n] = a
+    z[:n, n:n + m] = np.abs(b)
+    z[n:n + p, :n] = np.abs(c)
+    _, (scale, _) = scipy.linalg.matrix_balance(z, permute=False, separate=True)
+    return scale[:n] / scale[n] if k else scale[:n]
 
 
 @dataclass(frozen=True)
