@@ -55,7 +55,8 @@ from .structure.io import MatrixFileError, read_structure
 from .structure.model import ModalModel, UnknownDofError
 from .structure.reduction import craig_bampton
 
-__all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis"]
+__all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis",
+           "axis_from_tables"]
 
 SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "operation", "requirements",
             "tuning")
@@ -752,6 +753,22 @@ def load_axis(path) -> Axis:
             data = tomllib.load(handle)
     except tomllib.TOMLDecodeError as exc:
         raise AxisFormatError(f"{file}: not valid TOML ({exc}); fix the syntax") from None
+    return axis_from_tables(data, file)
+
+
+def axis_from_tables(data: dict, file) -> Axis:
+    """An axis from the tables of an ``axis.toml`` already read (a dict as :mod:`tomllib`
+    gives it), with ``file`` the path it stands for: data files are relative to its folder and
+    errors name it. A study varies the tables and builds each sample's axis this way.
+
+    Raises
+    ------
+    AxisFormatError
+        As :func:`load_axis`.
+    """
+    file = Path(file)
+    if not isinstance(data, dict):
+        raise AxisFormatError(f"{file}: the description must be a table of sections")
     unknown = set(data) - set(SECTIONS)
     if unknown:
         raise _err(file, "sections", f"unknown {sorted(unknown)}", f"use only {list(SECTIONS)}")
