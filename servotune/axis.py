@@ -596,6 +596,13 @@ def _operation(data, drive, friction, cutting, requirements, file, defaults
                    f"speed_max_rpm ({drive.speed_max:.4g} m/s at the slide)",
                    "lower it or raise speed_max_rpm")
     kwargs["rapid_speed"] = rapid
+    feeds = kwargs.get("feed_speeds", ())
+    if rapid is not None and feeds and max(feeds) > rapid:
+        where = ("[operation] rapid_speed" if "rapid_speed" in table
+                 else "[drive.motor] speed_max_rpm")
+        raise _err(file, where, f"the rapid speed {rapid:.4g} m/s is below the feed speed "
+                   f"{max(feeds):.4g} m/s", "check the motor's top speed and the feed speeds "
+                   "(m/s)")
     if "acceleration" in table:
         kwargs["acceleration"] = _number(table, "acceleration", file, "operation", low=1e-3,
                                          high=200.0, unit="m/s^2")
