@@ -109,6 +109,19 @@ def _os_message(exc: OSError) -> str:
     return str(exc)
 
 
+def _interrupted(label: str, args, what: str | None) -> int:
+    """Print the one line of an interrupted command; the exit status for it."""
+    from .. import interrupt
+
+    interrupt.restore_stderr()
+    run = getattr(args, "run_output", None)
+    done = (f"the results in {run.path} were written before" if run is not None
+            and run.committed else "nothing was written")
+    print(f"{label}: interrupted" + (f" during {what}" if what else "") + f"; {done}",
+          file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``servotune`` command; returns the process exit status (0 done, 1 an error of
     the input or a design that failed its checks, 2 a usage error, 130 interrupted)."""
@@ -133,14 +146,9 @@ def main(argv: list[str] | None = None) -> int:
             try:
                 return int(args.func(args) or 0)
             except KeyboardInterrupt:
-                interrupt.restore_stderr()
-                what = progress.current()
-                run = getattr(args, "run_output", None)
-                done = (f"the results in {run.path} were written before" if run is not None
-                        and run.committed else "nothing was written")
-                print(f"{label}: interrupted" + (f" during {what}" if what else "")
-                      + f"; {done}", file=sys.stderr)
-                return EXIT_INTERRUPTED
+                return _interrupted(label, args, progress.current())
+    except KeyboardInterrupt:  # pressed while the handling was being set up or taken down
+        return _interrupted(label, args, None)
     except (CliError, ValueError, RuntimeError, LookupError) as exc:
         print(f"{label}: error: {_text(exc)}", file=sys.stderr)
         return 1

@@ -26,7 +26,7 @@ __all__ = ["add_parser", "run", "BENCHMARK"]
 BENCHMARK = {"teeth": 2, "kt": 6e8, "kn": 2e8, "immersion": 1.0, "milling": "down"}
 SETUP_FLAGS = {"teeth": "--teeth", "kt": "--kt", "kn": "--kn", "immersion": "--immersion",
                "milling": "--milling"}
-DEFAULT_INTERVALS = 40  # servotune.chatter.sdm.DEFAULT_INTERVALS (tests check they agree)
+DEFAULT_INTERVALS = None  # servotune.chatter.sdm.DEFAULT_INTERVALS (tests check they agree)
 
 HZ = 1.0 / (2.0 * 3.141592653589793)
 MM = 1e-3
@@ -37,7 +37,7 @@ _NORMAL = number(0.0, 1e12, example="2e8", unit="N/m^2")
 _IMMERSION = number(0.0, 1.0, low_open=True, example=0.5)
 _RPM = number(0.0, 1e6, low_open=True, example=12000, unit="rpm")
 _SPEEDS = number(2, 100_000, integer=True, example=2000)
-_INTERVALS = number(4, 1000, integer=True, example=DEFAULT_INTERVALS)
+_INTERVALS = number(4, 4096, integer=True, example=40)
 _DEPTH_MM = number(0.0, 1e4, low_open=True, example=2, unit="mm")
 _MODE_PARTS = (("FN_HZ", number(0.0, 1e6, low_open=True, example=900, unit="Hz")),
                ("ZETA", number(0.0, 1.0, low_open=True, high_open=True, example=0.02)),
@@ -105,7 +105,8 @@ def add_parser(subparsers) -> None:
                         "finds the flip lobes of low immersion; needs --mode)")
     p.add_argument("--lobes", type=COUNT, help="zoa: number of lobes (default: enough for MIN)")
     p.add_argument("--intervals", type=_INTERVALS, default=DEFAULT_INTERVALS,
-                   help=f"sdm: intervals per tooth period ({DEFAULT_INTERVALS})")
+                   help="sdm: intervals per tooth period (default: chosen per speed from the tooth "
+                        "period and the highest mode, refined until b_lim is within 1 %%)")
     p.add_argument("--depth-max-mm", type=_DEPTH_MM,
                    help="sdm: deepest cut examined [mm] (default 5 x the zero-order b_crit)")
     p.add_argument("--required-depth-mm", type=_DEPTH_MM,
