@@ -583,7 +583,8 @@ class LoopAnalysis:
     Attributes
     ----------
     gain_margin : float
-        Gain margin [-] (inf when the phase never crosses -180 deg).
+        Gain margin [-]: the factor by which the loop gain may rise before the closed loop
+        becomes unstable, 1/|L| at the phase crossings where |L| < 1 (inf when there is none).
     phase_margin : float
         Phase margin [rad].
     crossover : float
@@ -596,6 +597,19 @@ class LoopAnalysis:
         Where Ms occurs [rad/s].
     bandwidth : float
         Closed-loop -3 dB bandwidth of L/(1+L) [rad/s].
+    gain_margin_lower : float
+        Lower gain margin [-] of a conditionally stable loop: the factor (< 1) to which the
+        loop gain may fall before the closed loop becomes unstable, 1/|L| at the phase
+        crossings where |L| > 1 (0 when there is none: any gain reduction is tolerated). A
+        velocity loop around an open-loop unstable plant (a sliding contact whose friction
+        falls with speed) or with integrators has one.
+
+    Notes
+    -----
+    The phase crossings lie on the negative real axis of the Nyquist plot, at -|L|; the gain
+    may change by a factor k as long as no crossing passes -1, so the nearest crossing left
+    of -1 bounds k from below and the nearest one right of it from above (Skogestad and
+    Postlethwaite, "Multivariable Feedback Control", 2nd ed., sec 2.4.3).
     """
 
     gain_margin: float
@@ -605,10 +619,17 @@ class LoopAnalysis:
     ms: float
     ms_frequency: float
     bandwidth: float
+    gain_margin_lower: float = 0.0
 
     @property
     def gain_margin_db(self) -> float:
         return 20.0 * math.log10(self.gain_margin) if self.gain_margin > 0 else -math.inf
+
+    @property
+    def gain_margin_lower_db(self) -> float:
+        """Lower gain margin in dB (negative; -inf when there is none)."""
+        return (20.0 * math.log10(self.gain_margin_lower) if self.gain_margin_lower > 0
+                else -math.inf)
 
     @property
     def phase_margin_deg(self) -> float:
@@ -624,6 +645,8 @@ class LoopAnalysis:
         return {
             "gain_margin": self.gain_margin if math.isfinite(self.gain_margin) else None,
             "gain_margin_db": gm_db if math.isfinite(gm_db) else None,
+            "gain_margin_lower_db": (self.gain_margin_lower_db
+                                     if self.gain_margin_lower > 0 else None),
             "phase_margin_deg": self.phase_margin_deg,
             "crossover_hz": self.crossover * HZ,
             "phase_crossover_hz": (self.phase_crossover * HZ
@@ -681,17 +704,21 @@ def analyse_loop(loop: control.StateSpace, omega=None) -> LoopAnalysis:
         pm = float(math.pi + pc - 2 * math.pi * math.floor((pc + math.pi) / (2 * math.pi)))
     else:
         wc, pm = math.nan, math.inf
-    # phase crossover: where the phase passes -180 deg (mod 360) with |L| largest -> GM
+    # phase crossings of -180 deg (mod 360): at -|L| on the Nyquist plot; the nearest one
+    # inside the unit circle gives the (upper) gain margin, the nearest one outside it the
+    # lower gain margin of a conditionally stable loop
     k = np.floor((phase + math.pi) / (2 * math.pi))
     flips = np.nonzero(np.diff(k) != 0)[0]
-    gm, wpc = math.inf, math.nan
+    gm, gm_lower, wpc = math.inf, 0.0, math.nan
     for i in flips:
         target = (max(k[i], k[i + 1])) * 2 * math.pi - math.pi
         f = (target - phase[i]) / (phase[i + 1] - phase[i])
         m_at = math.exp(math.log(mag[i]) + f * (math.log(mag[i + 1]) - math.log(mag[i])))
-        if 1.0 / m_at < gm:
+        if m_at < 1.0 and 1.0 / m_at < gm:
             gm = 1.0 / m_at
             wpc = float(omega[i] * (omega[i + 1] / omega[i]) ** f)
+        elif m_at >= 1.0:
+            gm_lower = max(gm_lower, 1.0 / m_at)
     # the closed-loop gain two decades below the grid stands for the DC gain: the state
     # space's own dcgain() is ill-conditioned when the loop carries a rigid-body mode (a free
     # integrator of position)
@@ -707,7 +734,7 @@ def analyse_loop(loop: control.StateSpace, omega=None) -> LoopAnalysis:
     else:
         bw = float(omega[below[0]]) if below.size else math.inf
     return LoopAnalysis(gain_margin=gm, phase_margin=pm, crossover=wc, phase_crossover=wpc,
-                        ms=ms, ms_frequency=w_ms, bandwidth=bw)
+                        ms=ms, ms_frequency=w_ms, bandwidth=bw, gain_margin_lower=gm_lower)
 
 
 @dataclass(frozen=True)

@@ -177,10 +177,21 @@ def loops_table(job) -> Table | None:
                  ("  phase margin [deg]", _f(a0 and a0.phase_margin_deg, "{:.1f}"),
                   _f(a1 and a1.phase_margin_deg, "{:.1f}")),
                  ("  gain margin [dB]", _f(a0 and a0.gain_margin_db, "{:.1f}"),
-                  _f(a1 and a1.gain_margin_db, "{:.1f}")),
-                 ("  bandwidth [Hz]", _f(a0 and a0.bandwidth_hz, "{:.3g}"),
+                  _f(a1 and a1.gain_margin_db, "{:.1f}"))]
+        if (a0 and a0.gain_margin_lower > 0) or (a1 and a1.gain_margin_lower > 0):
+            rows += [("  lower gain margin [dB]", _f(a0 and a0.gain_margin_lower_db, "{:.1f}"),
+                      _f(a1 and a1.gain_margin_lower_db, "{:.1f}"))]
+        rows += [("  bandwidth [Hz]", _f(a0 and a0.bandwidth_hz, "{:.3g}"),
                   _f(a1 and a1.bandwidth_hz, "{:.3g}"))]
-    notes = [c.text for c in r.checks if c.requirement in (
+    lower = [loop for loop in ("velocity", "position") if after is not None
+             and getattr(after, loop).gain_margin_lower > 0]
+    if lower:
+        notes = [f"the {' and '.join(lower)} loop is conditionally stable: the lower gain "
+                 "margin is how far the gain may fall (an integrator or a friction that falls "
+                 "with speed makes the open loop need a minimum gain)"]
+    else:
+        notes = []
+    notes += [c.text for c in r.checks if c.requirement in (
         "loop hierarchy", "Ti and velocity bandwidth", "current loop above")
         and c.model == ref]
     if r.stats.get("current_loop_bandwidth_hz"):

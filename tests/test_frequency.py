@@ -68,6 +68,27 @@ def test_gain_margin_of_a_third_order_lag():
     assert result.phase_crossover == pytest.approx(math.sqrt(3.0), rel=1e-5)
 
 
+def test_upper_and_lower_gain_margins_of_a_conditionally_stable_loop():
+    # L = 20 (s+1)^2 / (s^3 (s/100+1)^2) is stable only for gain factors g in (g_low, g_up);
+    # reference: the gains where a root of den + g num crosses the imaginary axis (root locus
+    # by bisection on the largest real part), independent of the phase crossings
+    from scipy.optimize import brentq
+
+    num = 20.0 * np.polymul([1.0, 1.0], [1.0, 1.0])
+    den = np.polymul([1.0, 0.0, 0.0, 0.0], np.polymul([0.01, 1.0], [0.01, 1.0]))
+
+    def largest_real_part(g):
+        return np.roots(np.polyadd(den, g * num)).real.max()
+
+    assert largest_real_part(1.0) < 0.0  # the nominal loop is stable
+    g_low = brentq(largest_real_part, 1e-3, 1.0, xtol=1e-12)
+    g_up = brentq(largest_real_part, 1.0, 100.0, xtol=1e-12)
+    result = analyse_loop(control.ss(control.tf(num, den)), omega=np.geomspace(1e-2, 1e4, 20001))
+    assert result.gain_margin == pytest.approx(g_up, rel=1e-5)
+    assert result.gain_margin_lower == pytest.approx(g_low, rel=1e-5)
+    assert result.gain_margin_lower_db < 0.0 < result.gain_margin_db
+
+
 def test_bandwidth_of_a_first_order_closed_loop():
     # L = wb/s gives T = wb/(s + wb): -3 dB at wb
     result = analyse_loop(control.ss(control.tf([25.0], [1.0, 0.0])))

@@ -594,6 +594,7 @@ _REASONS = {
     "gain_margin": "no phase crossover: the phase never reaches -180 deg",
     "gain_margin_db": "no phase crossover: the phase never reaches -180 deg",
     "phase_crossover_hz": "no phase crossover: the phase never reaches -180 deg",
+    "gain_margin_lower_db": "no lower gain margin: the loop tolerates any gain reduction",
     "bandwidth_hz": "the closed loop does not fall 3 dB below its static gain in the "
                     "frequency range",
     "margin": "no chatter limit in the depths examined",

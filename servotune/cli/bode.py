@@ -56,12 +56,13 @@ def run(args) -> int:
         return 0
     print(f"{axis.name}: loops with {contact.note}; Kv = {axis.drive.kv:.3g} 1/s "
           f"({axis.drive.kv_m_per_min_per_mm:.3g} (m/min)/mm)")
-    print(f"  {'loop':10} {'PM [deg]':>9} {'GM [dB]':>8} {'Ms':>6} {'crossover [Hz]':>15} "
-          f"{'bandwidth [Hz]':>15}")
+    print(f"  {'loop':10} {'PM [deg]':>9} {'GM [dB]':>8} {'lower GM [dB]':>14} {'Ms':>6} "
+          f"{'crossover [Hz]':>15} {'bandwidth [Hz]':>15}")
     for name in ("velocity", "position"):
         a = out[f"{name}_loop"]
         gm = "inf" if a["gain_margin_db"] is None else f"{a['gain_margin_db']:.1f}"
-        print(f"  {name:10} {a['phase_margin_deg']:9.1f} {gm:>8} {a['ms']:6.2f} "
+        low = "-" if a["gain_margin_lower_db"] is None else f"{a['gain_margin_lower_db']:.1f}"
+        print(f"  {name:10} {a['phase_margin_deg']:9.1f} {gm:>8} {low:>14} {a['ms']:6.2f} "
               f"{a['crossover_hz']:15.2f} {a['bandwidth_hz']:15.2f}")
     print(f"  wrote {run.path}")
     return 0
