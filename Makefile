@@ -23,7 +23,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 
 ## make demo: install, run the main job on the bundled default, figures in out/
 demo: $(VENV)/.installed
-	$(BIN)/servotune tune models/paper_x_axis --out $(OUT)/tune_paper_x_axis --force
+	$(BIN)/servotune tune models/paper_x_axis --out $(OUT)
 
 ## headless Chromium and its driver for the browser test of the report (Debian packages);
 ## installed only when one of them is missing
