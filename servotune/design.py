@@ -467,15 +467,27 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
 
 
-def check_design(axis: Axis, design: Design, simulate_before: bool = True) -> TuningResult:
+def check_design(axis: Axis, design: Design, simulate_before: bool = True,
+                 feed_speeds=None) -> TuningResult:
     """The checks of a given design without tuning: the axis' regime models, the dense
     linear check of the design and of the axis' own one (``initial``) in every model, and
-    every requirement judged (as :func:`servotune.tuning.tune` ends)."""
+    every requirement judged (as :func:`servotune.tuning.tune` ends).
+
+    ``feed_speeds`` [m/s] judges the axis feeding at these speeds instead of its own
+    ``[operation] feed_speeds`` (each gets its linear regime model, its claim and its share of
+    the thrust budget)."""
+    import dataclasses
     import time
 
     from .drive import current_loop_bandwidth
     from .tuning import requirement_checks, verify
 
+    if feed_speeds is not None:
+        if axis.operation is None:
+            raise ValueError(f"{axis.file}: feed speeds need [drive] and [friction] (the "
+                             "feeding regimes are models of the sliding guide ways)")
+        axis = dataclasses.replace(axis, operation=dataclasses.replace(
+            axis.operation, feed_speeds=tuple(float(v) for v in feed_speeds)))
     t0 = time.perf_counter()
     problem = tuning_problem(axis, free=("c", "kv", "kp", "ti") if axis.drive else ("c",))
     x0 = problem.initial_design()

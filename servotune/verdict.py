@@ -353,7 +353,9 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
     band_hz : (float, float), optional
         The sweep band instead of the one from the axis.
     speeds : sequence of float, optional
-        Feed speeds [m/s] to judge instead of the regimes' (for ``servotune verify``).
+        Judge only the standing regime and the feeding regimes at these speeds [m/s]; each
+        must have its regime model in ``result`` (:func:`servotune.design.check_design` with
+        ``feed_speeds`` builds them), so that every regime judged has a linear claim.
     simulate_before : bool
         Also simulate the initial design (for the realised improvement).
     """
@@ -371,10 +373,16 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
             regimes.append(model.regime)
             speed_of[model.regime] = model.speed
     if speeds is not None:
-        regimes = ["standing"] if "standing" in regimes else []
+        chosen = [name for name in regimes if speed_of[name] == 0.0]
         for v in speeds:
-            regimes.append(f"feeding {v * 1e3:.3g} mm/s")
-            speed_of[regimes[-1]] = float(v)
+            match = [name for name in regimes if speed_of[name] > 0.0
+                     and math.isclose(speed_of[name], float(v), rel_tol=1e-9)]
+            if not match:
+                raise ValueError(f"no regime model feeds at {v * 1e3:.4g} mm/s: build the "
+                                 "result with check_design(..., feed_speeds=...) so that the "
+                                 "regime has a linear claim")
+            chosen += [name for name in match if name not in chosen]
+        regimes = chosen
     before_ok = result.before.stable and simulate_before
     omega = 2 * math.pi * np.geomspace(0.5, 2500.0, 6000)
     modes = _wp_modes_hz(axis, np.array(req.band) * HZ)

@@ -195,6 +195,37 @@ def test_feeding_below_the_stribeck_speed_is_flagged_and_stick_slip_confirmed(tm
     assert sim.stick_slip is True
 
 
+def test_a_feed_speed_the_design_was_not_tuned_for_is_judged_against_its_own_linear_claim(
+        tmp_path):
+    # the starter axis feeds at 20 and 80 mm/s; judged at 30 mm/s as well, that regime gets
+    # its sliding model (claim) and the LuGre time simulation must agree with it within the
+    # nonlinear tolerance (two methods); at 10 mm/s, the Stribeck speed, the friction slope
+    # -(Fs - Fc)/vs exp(-1) = -1.4e5 N s/m outweighs the guide ways' 5.6e3 N s/m: the linear
+    # model is unstable and the axis fed there without force sticks and slips: both say so
+    from servotune.design import check_design
+    from servotune.template import write_template
+    from servotune.verdict import nonlinear_verdict
+
+    write_template(tmp_path)
+    axis = load_axis(tmp_path)
+    design = Design(c=5578.0, kv=45.3, kp=3.03, ti=0.0105)
+    result = check_design(axis, design, feed_speeds=[0.01, 0.03])
+    verdict = nonlinear_verdict(axis, result, forces=(268.0,), speeds=[0.01, 0.03],
+                                simulate_before=False)
+    regimes = {r.name: r for r in verdict.regimes}
+    assert set(regimes) == {"standing", "feeding 10 mm/s", "feeding 30 mm/s"}
+    mid = regimes["feeding 30 mm/s"]
+    assert mid.claimed_peak is not None and math.isfinite(mid.claimed_peak)
+    assert mid.holds, mid.reason
+    assert mid.nonlinear_peak_after == pytest.approx(mid.claimed_peak, rel=0.3)
+    slow = regimes["feeding 10 mm/s"]
+    assert not slow.holds and not math.isfinite(slow.claimed_peak)
+    assert "unstable" in slow.reason and "stick-slip" in slow.reason
+    assert not verdict.verified
+    with pytest.raises(ValueError, match="no regime model feeds at 50 mm/s"):
+        nonlinear_verdict(axis, result, speeds=[0.05])
+
+
 def test_the_verdict_sweeps_where_the_resonance_is_and_flags_a_band_that_misses_it(tmp_path):
     # the starter axis resonates near 112 Hz, outside the paper's 10-100 Hz sweep: the
     # verdict's band holds it (not at an edge); a 10-100 Hz band puts the peak at its edge,

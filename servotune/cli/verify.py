@@ -121,7 +121,7 @@ def run(args) -> int:
     names = ["results.json"] + ([] if args.no_plots else ["nonlinear.png"])
     output = RunOutput.for_args(args, "verify", axis.name, names)
     with progress.task(f"{axis.name}: linear check"):
-        result = check_design(axis, design)
+        result = check_design(axis, design, feed_speeds=args.speed)
     workers = args.workers or default_workers()
     with progress.task(f"{axis.name}: nonlinear simulations", unit="run") as task, \
             (interrupt.process_pool(workers) if workers > 1 else _NoPool()) as pool:
