@@ -1,37 +1,53 @@
 """Tuning the bundled axis: casadi/IPOPT against scipy on the same objective and constraints.
 
-Case: ``models/paper_x_axis`` with C, Kv, Kp and Ti free (``servotune.design.tuning_problem``
-with its defaults): objective = peak work-piece compliance over the band / its initial value
-+ ``tracking_weight`` Kv0/Kv; constraints = Ms of the velocity and of the position loop below
-the axis requirements (``Requirements.ms_limit``, which folds in the phase and gain margins),
-closed-loop stability, bounds. All methods work in the same log-scaled variables
-``u = log(x / x0)`` within the same bounds.
+Case: ``models/paper_x_axis`` with the free variables of its ``[tuning]`` (C, Kv, Kp, Ti) and
+every regime model the axis works in (standing: presliding and the describing function at the
+process amplitude; feeding at each feed speed: LuGre linearised about sliding), set up as
+``servotune tune`` sets it up (``servotune.design.tuning_problem`` with the axis' settings: the
+digital drive's delays, the thrust budget). The problem is the NLP of
+:mod:`servotune.tuning.nlp`::
+
+    minimise    max_m t_m + mean_weight mean_m t_m  +  tracking_weight Kv0/Kv
+                + c_cost_weight (C - C_lo)/C_span          (t_m = peak |h_m| / h0, cutting model m)
+    subject to  Ms of the velocity and of the position loop in every model (the Ms disk),
+                the loop hierarchy (velocity-loop bandwidth >= N x the position loop's), the
+                integral time (Ti x velocity bandwidth within [r_min, r_max]) and the current
+                loop above the velocity loop, in every moving model, as the NLP's smooth gates;
+                the thrust budget (C v within the motor's usable thrust at each case); Kv >= Kv_min;
+                closed-loop stability in every model; bounds.
+
+All methods work in the same log-scaled variables ``u = log(x / x0)`` within the same bounds.
 
 * ``casadi``: :func:`servotune.tuning.tune` as shipped (IPOPT, exact derivatives, grid exchange,
   several starts; its time includes its own python-control verification of the initial and the
-  final design).
+  final design in every regime model).
 * ``scipy_de``: ``scipy.optimize.differential_evolution`` with
   ``constraints=NonlinearConstraint(...)`` (Lampinen's feasibility rules: no penalty weight),
   default polish (trust-constr).
 * ``scipy_nm``: ``scipy.optimize.minimize(method="Nelder-Mead")`` with bounds, from the same
-  starting points as casadi (the initial design plus the same seeded stable draws), restarted
-  from its own result until it stops improving; constraints by an exact (L1) penalty
-  ``f + rho * sum(max(0, 1 - g_i))`` with rho = 10 (large enough: the penalised optimum is
-  the constrained one the other methods find), unstable designs get +inf.
+  starting points as casadi (:func:`servotune.tuning.solve.stable_starts`: the initial design, or
+  a softer velocity loop when the initial one is unstable, plus the same seeded stable draws),
+  restarted from its own result until it stops improving; constraints by an exact (L1) penalty
+  ``f + rho * sum(max(0, 1 - g_i))`` with rho = 10, unstable designs get +inf.
 
 The scipy objective evaluates :class:`servotune.tuning.ResponseModel` (the same port-coupled
-responses as casadi, numerically) on ONE fixed log grid over the loop band (``--grid`` points;
-the compliance is taken on its part inside the objective band), so a design costs one call.
-Stability, which casadi keeps by continuity from stable starts and checks by the poles of the
-python-control plant, is checked here on every design by the eigenvalues of the closed-loop
-state matrix: that matrix is multi-affine in the design,
-``A = A0 + c A1 + Kv A2 + Kp A3 + Kp/Ti A4 + Kp Kv A5``; the six matrices are fitted from
-``build_plant`` at random designs and the fit is checked at two others (it is exact to
-round-off), so the check costs one 85 x 85 eigenvalue problem instead of an interconnection.
+responses as casadi, numerically, with the digital drive's delays exact) on ONE fixed log grid
+over the loop band (``--grid`` points; the compliance is taken on its part inside the objective
+band), so a design costs one call; the gated rows are those of the NLP (the same gate constants,
+:func:`servotune.tuning.nlp.gate_parameters`), with the ratio of the position loop's bandwidth to
+Kv taken from the design itself (casadi updates it between its exchange rounds); h0 and s0 are
+the NLP's scale factors at casadi's reference start. Stability, which casadi keeps by continuity
+from stable starts and checks by the poles of the python-control plant, is checked here on every
+design by the eigenvalues of each model's closed-loop state matrix: that matrix is multi-affine in
+the design, ``A = A0 + c A1 + Kv A2 + Kp A3 + Kp/Ti A4 + Kp Kv A5``; the six matrices of each
+model are fitted from ``build_plant`` at random designs and the fit is checked at two others (it
+is exact to round-off), so the check costs one eigenvalue problem per model instead of an
+interconnection.
 
 Every final design is judged by ONE common evaluator: :func:`servotune.tuning.verify`
-(python-control on dense grids none of the methods used) plus the objective formula, with the
-constraint violations ``Ms - limit`` of both loops.
+(python-control on dense grids none of the methods used) and
+:func:`servotune.tuning.requirement_checks` (every requirement in every model, as the design job
+judges it), plus the objective formula on the verified peaks.
 
 Speedup at equal objective: each method records when its best feasible design on its own grid
 improves; the time scipy needs to reach casadi's objective (casadi's design evaluated on
@@ -62,27 +78,31 @@ import casadi  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 from scipy.optimize import NonlinearConstraint, differential_evolution, minimize  # noqa: E402
+from scipy.special import expit  # noqa: E402
 
 from servotune.axis import load_axis  # noqa: E402
 from servotune.design import tuning_problem  # noqa: E402
-from servotune.plant import Contact, UnstableLoopError, build_plant  # noqa: E402
-from servotune.tuning import Design, ResponseModel, tune, verify  # noqa: E402
+from servotune.drive import current_loop_bandwidth  # noqa: E402
+from servotune.plant import build_plant  # noqa: E402
+from servotune.tuning import Design, ResponseModel, requirement_checks, tune, verify  # noqa: E402
 from servotune.tuning import solve as tuning_solve  # noqa: E402
+from servotune.tuning.nlp import GATE_SHARPNESS, gate_parameters  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO = 10.0
 
 
 class ClosedLoopMatrix:
-    """Closed-loop state matrix A(design) = sum_k m_k(design) A_k (multi-affine, fitted)."""
+    """Closed-loop state matrices A_m(design) = sum_k mono_k(design) A_mk of every regime model
+    (multi-affine in the design, fitted)."""
 
     @staticmethod
     def monomials(d: Design) -> np.ndarray:
         return np.array([1.0, d.c, d.kv, d.kp, d.kp / d.ti, d.kp * d.kv])
 
     def __init__(self, problem, rng):
-        if problem.contact_stiffness:
-            raise ValueError("the benchmark assumes purely viscous pads")
+        if problem.drive is None:
+            raise ValueError("the benchmark assumes an axis with a drive")
         self.problem = problem
 
         def draw():
@@ -90,33 +110,51 @@ class ClosedLoopMatrix:
                 v: float(math.exp(rng.uniform(*np.log(problem.bounds[v])))) for v in problem.free})
 
         fit = [problem.initial_design()] + [draw() for _ in range(9)]
+        check = [draw(), draw()]
         m = np.array([self.monomials(d) for d in fit])
-        a = np.array([self._exact(d).ravel() for d in fit])
-        coef, *_ = np.linalg.lstsq(m, a, rcond=None)
-        self.n = math.isqrt(a.shape[1])
-        self.coef = coef
-        self.fit_error = max(
-            float(np.abs(self(d) - self._exact(d)).max() / np.abs(self._exact(d)).max())
-            for d in (draw(), draw()))
+        self.coef, self.n, self.fit_error = [], [], 0.0
+        for model in problem.regimes:
+            a = np.array([self._exact(model, d).ravel() for d in fit])
+            coef, *_ = np.linalg.lstsq(m, a, rcond=None)
+            n = math.isqrt(a.shape[1])
+            self.coef.append(coef)
+            self.n.append(n)
+            for d in check:
+                exact = self._exact(model, d)
+                approx = (self.monomials(d) @ coef).reshape(n, n)
+                self.fit_error = max(self.fit_error, float(np.abs(approx - exact).max()
+                                                           / np.abs(exact).max()))
         if not self.fit_error < 1e-10:
             raise RuntimeError(f"A(design) is not multi-affine here (fit error "
                                f"{self.fit_error:.2g})")
 
-    def _exact(self, d: Design) -> np.ndarray:
+    def _exact(self, model, d: Design) -> np.ndarray:
         p = self.problem
-        return build_plant(p.structure, p.drive_for(d), Contact.viscous(d.c), p.pads).A
+        return build_plant(p.structure, p.drive_for(d), model.contact(d.c), p.pads).A
 
-    def __call__(self, d: Design) -> np.ndarray:
-        return (self.monomials(d) @ self.coef).reshape(self.n, self.n)
+    def matrices(self, d: Design) -> list[np.ndarray]:
+        mono = self.monomials(d)
+        return [(mono @ c).reshape(n, n) for c, n in zip(self.coef, self.n, strict=True)]
 
     def stable(self, d: Design) -> bool:
-        return bool(np.linalg.eigvals(self(d)).real.max() < 0)
+        """Every model stable (the criterion of ``servotune.frequency.require_stable``)."""
+        for a in self.matrices(d):
+            poles = np.linalg.eigvals(a)
+            scale = max(float(np.abs(poles).max(initial=0.0)), 1.0)
+            if (poles.real > 1e-9 * scale).any():
+                return False
+        return True
+
+
+def _gate(y):
+    return expit(GATE_SHARPNESS * y)
 
 
 class GridObjective:
     """The tuning objective and constraints of a problem on one fixed grid (numpy)."""
 
-    def __init__(self, problem, n_grid: int, closed_loop: ClosedLoopMatrix):
+    def __init__(self, problem, n_grid: int, closed_loop: ClosedLoopMatrix, reference: Design,
+                 current_bandwidth):
         req = problem.requirements
         lo, hi = min(req.band[0], req.loop_band[0]), max(req.band[1], req.loop_band[1])
         self.problem = problem
@@ -124,6 +162,8 @@ class GridObjective:
         w = self.model.omega
         self.in_band = (w >= req.band[0]) & (w <= req.band[1])
         self.in_loop = (w >= req.loop_band[0]) & (w <= req.loop_band[1])
+        self.log_w_loop = np.log(w[self.in_loop])
+        self.cut = list(problem.cutting_models)
         self.x0 = problem.initial_design()
         self.free = problem.free
         self.lower = np.array([math.log(problem.bounds[v][0] / getattr(self.x0, v))
@@ -132,11 +172,13 @@ class GridObjective:
                                for v in self.free])
         self.ms = [req.ms_limit("velocity"), req.ms_limit("position")]
         self.kv_min = req.kv_min if "kv" in self.free else 0.0
+        self.thrust = ([(f, v, u) for f, v, u, _ in problem.thrust.linear_form() if v > 0]
+                       if problem.thrust is not None and "c" in self.free else [])
+        self.current_bandwidth = current_bandwidth
         self.closed_loop = closed_loop
         self.mu = problem.chatter.mu if problem.chatter is not None else 1.0
-        h = self.model(self.x0)["compliance"][self.in_band]
-        self.h0 = float(np.abs(h).max())
-        self.r0 = float((self.mu * h.real).min())
+        # the NLP's scale factors (peak and -min Re(mu G) of the reference start)
+        self.h0, self.s0 = tuning_solve._scale_factors(problem, reference)
         self._cache = {}
         self.evaluations = 0
         self.t0 = time.perf_counter()
@@ -149,6 +191,48 @@ class GridObjective:
     def u_of(self, d: Design) -> np.ndarray:
         return np.array([math.log(getattr(d, v) / getattr(self.x0, v)) for v in self.free])
 
+    def objective_of(self, d: Design, peaks, min_re) -> float:
+        """The NLP's objective from the cutting models' peaks [m/N] and min Re(mu G) [m/N]."""
+        p = self.problem
+        w_peak, w_chatter = p.weights
+        f = 0.0
+        if w_peak:
+            t = np.asarray(peaks) / self.h0
+            f += w_peak * (float(t.max()) + p.mean_weight * float(t.mean()))
+        if w_chatter:
+            f += w_chatter * float(-min_re) / self.s0
+        if "kv" in self.free and p.tracking_weight:
+            f += p.tracking_weight * self.x0.kv / d.kv
+        if p.c_cost is not None:
+            c_lo, span = p.c_cost
+            f += p.c_cost_weight * (d.c - c_lo) / span
+        return f
+
+    def gate_rows(self, d: Design, lv: np.ndarray, lp: np.ndarray) -> list[float]:
+        """Smallest value of each gated row of the NLP over the loop grid, every model."""
+        p, req = self.problem, self.problem.requirements
+        w = self.model.omega[self.in_loop]
+        gamma = np.array([max(tuning_solve._bandwidth(w, lp[m]) / d.kv, 1e-3)
+                          for m in range(lp.shape[0])])
+        gates = gate_parameters(p, gamma, self.current_bandwidth)
+        lw, off, out = self.log_w_loop, 2.0, []
+        for m in range(lv.shape[0]):
+            on_h, edge_h, on_lo, edge_lo, on_hi, edge_hi, on_i, edge_i = gates[m]
+            tv2 = np.abs(lv[m]) ** 2 / np.abs(1.0 + lv[m]) ** 2
+            up, down = (tv2 - 0.5) / (tv2 + 0.5), (0.5 - tv2) / (0.5 + tv2)
+            if req.bandwidth_ratio_min > 0:
+                out.append(up + _gate(lw - (edge_h + math.log(d.kv))) + off * (1 - on_h))
+            if req.ti_bandwidth_min > 0:
+                out.append(up + _gate(lw - (edge_lo - math.log(d.ti))) + off * (1 - on_lo))
+            if req.ti_bandwidth_max > 0:
+                edge = edge_hi - math.log(d.ti)
+                out.append(down + _gate(edge - lw) + _gate(lw - edge - math.log(1.25))
+                           + off * (1 - on_hi))
+            if req.current_bandwidth_ratio_min > 0:
+                out.append(down + _gate(edge_i - lw) + _gate(lw - edge_i - math.log(1.25))
+                           + off * (1 - on_i))
+        return [float(r.min()) for r in out]
+
     def values(self, u):
         """(objective, constraint values g (feasible when all >= 1), stable)."""
         key = tuple(float(x) for x in u)
@@ -157,17 +241,14 @@ class GridObjective:
         self.evaluations += 1
         d = self.design(u)
         res = self.model(d)
-        h = res["compliance"][self.in_band]
-        w_peak, w_chatter = self.problem.weights
-        f = w_peak * float(np.abs(h).max()) / self.h0
-        if w_chatter:
-            f += w_chatter * float((self.mu * h.real).min()) / self.r0
-        if "kv" in self.free:
-            f += self.problem.tracking_weight * self.x0.kv / d.kv
-        g = []
-        if self.problem.drive is not None:
-            for limit, key_loop in zip(self.ms, ("loop_velocity", "loop_position"), strict=True):
-                g.append(limit * float(np.abs(1.0 + res[key_loop][self.in_loop]).min()))
+        h = res["compliance"][self.cut][:, self.in_band]
+        f = self.objective_of(d, np.abs(h).max(axis=1), float((self.mu * h.real).min()))
+        lv = res["loop_velocity"][:, self.in_loop]
+        lp = res["loop_position"][:, self.in_loop]
+        g = [limit * float(np.abs(1.0 + loop).min())
+             for limit, loop in zip(self.ms, (lv, lp), strict=True)]
+        g += [1.0 + v for v in self.gate_rows(d, lv, lp)]
+        g += [2.0 - (fixed + d.c * speed) / usable for fixed, speed, usable in self.thrust]
         if self.kv_min > 0:
             g.append(d.kv / self.kv_min)
         stable = self.closed_loop.stable(d)
@@ -205,48 +286,35 @@ class GridObjective:
         return f + RHO * float(np.maximum(0.0, 1.0 - g).sum())
 
 
-def common_evaluation(problem, before, design: Design) -> dict:
-    """The independent evaluator: python-control verification plus the objective formula."""
-    req = problem.requirements
-    try:
-        perf = verify(problem, design)
-    except UnstableLoopError as exc:
-        return {"design": design.to_dict(), "stable": False, "reason": str(exc)}
-    w_peak, w_chatter = problem.weights
-    x0 = problem.initial_design()
-    value = w_peak * perf.peak_compliance / before.peak_compliance
-    if w_chatter:
-        value += w_chatter * before.b_crit / perf.b_crit
-    if "kv" in problem.free:
-        value += problem.tracking_weight * x0.kv / design.kv
-    out = {"design": design.to_dict(), "stable": True, "objective": value,
-           "peak_compliance": perf.peak_compliance,
-           "peak_frequency_hz": perf.peak_frequency / (2 * math.pi)}
-    if perf.velocity is not None:
-        out.update(ms_velocity=perf.velocity.ms, ms_position=perf.position.ms,
-                   ms_velocity_violation=perf.velocity.ms - req.ms_limit("velocity"),
-                   ms_position_violation=perf.position.ms - req.ms_limit("position"))
-        out["feasible"] = (out["ms_velocity_violation"] <= 1e-3 * req.ms_limit("velocity")
-                           and out["ms_position_violation"] <= 1e-3 * req.ms_limit("position"))
-    else:
-        out["feasible"] = True
+def common_evaluation(grid: GridObjective, design: Design) -> dict:
+    """The independent evaluator: python-control verification in every regime model, every
+    requirement check, and the objective formula on the verified peaks."""
+    problem = grid.problem
+    perf = verify(problem, design)
+    checks = requirement_checks(problem, design, perf, grid.current_bandwidth)
+    failed = [c.text for c in checks if not c.holds]
+    out = {"design": design.to_dict(), "stable": perf.stable, "feasible": not failed,
+           "failed_checks": failed}
+    if not perf.stable:
+        return out
+    models = [perf.models[m] for m in grid.cut]
+    peaks = [mp.peak_compliance for mp in models]
+    min_re = 0.0
+    if problem.chatter is not None and problem.weights[1]:
+        # b_crit = -1 / (2 Kt min Re(mu G)) in each model: the worst model's min Re(mu G)
+        min_re = min(-1.0 / (2.0 * problem.chatter.kt * mp.b_crit) for mp in models)
+    out.update(objective=grid.objective_of(design, peaks, min_re),
+               peak_compliance=max(peaks),
+               peak_compliance_models={mp.model.name: mp.peak_compliance for mp in models},
+               worst_model=perf.worst_model.model.name if perf.worst_model else None,
+               peak_frequency_hz=perf.peak_frequency / (2 * math.pi))
+    ms_v = [mp.velocity.ms for mp in perf.models if mp.velocity is not None]
+    ms_p = [mp.position.ms for mp in perf.models if mp.position is not None]
+    if ms_v:
+        out.update(ms_velocity=max(ms_v), ms_position=max(ms_p),
+                   ms_velocity_violation=max(ms_v) - problem.requirements.ms_limit("velocity"),
+                   ms_position_violation=max(ms_p) - problem.requirements.ms_limit("position"))
     return out
-
-
-def start_points(problem, closed_loop: ClosedLoopMatrix, starts: int, seed: int):
-    """The starting points of :func:`servotune.tuning.tune`: the initial design and seeded
-    log-uniform draws within the bounds, unstable draws skipped (same sequence)."""
-    x0 = problem.initial_design()
-    rng = np.random.default_rng(seed)
-    designs, draws = [x0], 0
-    while len(designs) < max(starts, 1) and draws < 20 * starts:
-        draws += 1
-        values = {v: float(math.exp(rng.uniform(*np.log(problem.bounds[v]))))
-                  for v in problem.free}
-        candidate = replace(x0, **values)
-        if closed_loop.stable(candidate):
-            designs.append(candidate)
-    return designs
 
 
 def run_de(grid: GridObjective, budget: float, seed: int, popsize: int):
@@ -336,19 +404,24 @@ def main(argv=None):
         t_casadi, cpu_casadi = time.perf_counter() - t0, time.process_time() - c0
     finally:
         tuning_solve.verify = verify
+    # the problem tune() solved (without models it excluded at the start) and its reference
+    # start (the scale of the objective)
+    problem = result.problem
+    current_bw = current_loop_bandwidth(problem.drive) if problem.drive is not None else None
     t0 = time.perf_counter()
-    before = verify(problem, problem.initial_design())
+    verify(problem, result.design)
     t_verify = time.perf_counter() - t0
 
     # scipy ----------------------------------------------------------------------------
     t0 = time.perf_counter()
     closed_loop = ClosedLoopMatrix(problem, np.random.default_rng(12345))
-    grid = GridObjective(problem, args.grid, closed_loop)
+    grid = GridObjective(problem, args.grid, closed_loop, result.start or result.initial,
+                         current_bw)
     t_setup = time.perf_counter() - t0
     casadi_on_grid = grid.values(grid.u_of(result.design))
     target = casadi_on_grid[0]
 
-    evaluations = {"casadi": common_evaluation(problem, before, result.design)}
+    evaluations = {"casadi": common_evaluation(grid, result.design)}
     evaluations["casadi"].update(time_s=t_casadi, cpu_s=cpu_casadi,
                                  time_in_own_verification_s=spent["verify_s"],
                                  time_optimisation_s=t_casadi - spent["verify_s"],
@@ -364,7 +437,7 @@ def main(argv=None):
         runs["scipy_de"] = (u, t, time.process_time() - c0, info, list(grid.history))
     if "nm" in methods:
         c0 = time.process_time()
-        starts = start_points(problem, closed_loop, args.starts, args.seed)
+        starts = tuning_solve.stable_starts(problem, args.starts, args.seed).designs
         u, t, info = run_nm(grid, starts, args.nm_budget)
         runs["scipy_nm"] = (u, t, time.process_time() - c0, info, list(grid.history))
     for name, (u, t, cpu, info, history) in runs.items():
@@ -372,7 +445,7 @@ def main(argv=None):
         grid.history = history
         reach = {f"time_to_casadi_objective_rtol_{r:g}_s": grid.time_to_reach(target, r)
                  for r in sorted({args.match, 1e-2, 1e-3})}
-        ev = common_evaluation(problem, before, grid.design(u))
+        ev = common_evaluation(grid, grid.design(u))
         ev.update(time_s=t, cpu_s=cpu, setup_s=t_setup, objective_on_scipy_grid=f,
                   feasible_on_scipy_grid=bool(stable and np.all(g >= 1 - 1e-9)), **info, **reach)
         t_equal = grid.time_to_reach(target, args.match)
@@ -387,12 +460,21 @@ def main(argv=None):
     speedups = [ev["speedup"] or ev["speedup_lower_bound"]
                 for k, ev in evaluations.items() if k != "casadi"]
     out = {
-        "case": f"{axis.name}: free {','.join(problem.free)}, objective peak/peak0 + "
-                f"{problem.tracking_weight} Kv0/Kv, Ms velocity <= "
-                f"{problem.requirements.ms_limit('velocity'):.4f}, Ms position <= "
-                f"{problem.requirements.ms_limit('position'):.4f}, stable",
+        "case": f"{axis.name}: free {','.join(problem.free)}, {len(problem.regimes)} regime "
+                f"models, objective worst peak/h0 + {problem.mean_weight} mean peak/h0 + "
+                f"{problem.tracking_weight} Kv0/Kv + {problem.c_cost_weight} C cost, Ms velocity "
+                f"<= {problem.requirements.ms_limit('velocity'):.4f}, Ms position <= "
+                f"{problem.requirements.ms_limit('position'):.4f}, loop hierarchy, Ti, current "
+                "loop, thrust, stable in every model",
+        "regime_models": [m.name for m in problem.regimes],
+        "excluded_models": [m.name for m, _ in result.excluded],
+        "initial_design": result.initial.to_dict(),
+        "reference_start": None if result.start is None else result.start.to_dict(),
+        "scale_h0_m_per_n": grid.h0,
         "time_casadi_s": t_casadi,
         "time_one_verification_s": t_verify,
+        "baseline": "scipy differential_evolution and Nelder-Mead on the same objective and "
+                    "constraints (one fixed grid), time to casadi's objective",
         "scipy_grid_points": args.grid,
         "match_rtol": args.match,
         "closed_loop_fit_error": closed_loop.fit_error,
@@ -427,8 +509,8 @@ def main(argv=None):
                 print(f"  {name}: does not reach casadi's objective (rtol {args.match:g}) "
                       f"within {ev['time_s']:.0f} s: speedup > {ev['speedup_lower_bound']:.1f} x")
         print(f"  casadi: {t_casadi:.2f} s in all, of which {spent['verify_s']:.2f} s in its "
-              f"own python-control verification (2 designs); load average {load_start:.1f} -> "
-              f"{os.getloadavg()[0]:.1f}")
+              f"own python-control verification (2 designs, every regime model); load average "
+              f"{load_start:.1f} -> {os.getloadavg()[0]:.1f}")
     return out
 
 

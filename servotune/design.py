@@ -565,7 +565,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
                               "feed_force_n": axis.operation.feed_force}
         out["c_realisation"] = c_realisations(problem.thrust, result.design.c,
                                               axis.friction.lugre.sigma2, amp, freq,
-                                              axis.friction.lugre.sigma0)
+                                              axis.friction.lugre.sigma0, axis.operation)
     if axis.drive is not None and result.after is not None:
         before_drive = problem.drive_for(result.initial)
         after_drive = problem.drive_for(result.design)

@@ -222,8 +222,10 @@ class CRealisation:
     force_rapid: float | None            # extra force at rapid traverse [N]
     power_rapid: float | None            # [W]
     friction_level: float | None         # friction damper: F_d [N]
-    fits: bool
+    fits: bool                           # realises C wherever the design relies on it, in budget
     note: str
+    damps_while_feeding: bool = True     # a friction damper does not (its force keeps its sign)
+    fits_thrust: bool | None = None      # the thrust budget alone (None: no torque limits)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -240,9 +242,17 @@ def _friction_damper_level(dc: float, amplitude: float, omega: float,
 
 def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
                    amplitude: float | None, frequency: float | None,
-                   contact_stiffness: float | None) -> tuple[CRealisation, ...]:
+                   contact_stiffness: float | None,
+                   operation: Operation | None = None) -> tuple[CRealisation, ...]:
     """The options that would realise a total viscous damping ``c`` over the identified
-    ``sigma2`` [N s/m], with their cost and whether the thrust budget holds.
+    ``sigma2`` [N s/m], with their cost and whether they fit.
+
+    An option fits when the thrust budget holds with it AND it gives the damping in every
+    regime the design was tuned for: a friction damper damps only while the pads vibrate and
+    reverse, so it cannot realise C for an axis that also works feeding (the design's feeding
+    claims rely on C), and its equivalent damping holds at the process amplitude only
+    (falling about as 1/A above it; the note gives Ceq at a quarter and at three times the
+    amplitude).
 
     Parameters
     ----------
@@ -253,9 +263,13 @@ def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
         friction damper).
     contact_stiffness : float, optional
         Tangential stiffness of the friction damper's contact [N/m] (the guide ways' sigma0).
+    operation : Operation, optional
+        The regimes of the axis (default: the budget's).
     """
     dc = float(c) - float(sigma2)
-    op = budget.operation if budget is not None else None
+    op = operation if operation is not None else (
+        budget.operation if budget is not None else None)
+    feeding = bool(op is not None and op.feed_speeds)
     v_feed = max(op.feed_speeds) if op is not None and op.feed_speeds else None
     v_rapid = op.rapid_speed if op is not None else None
     out = []
@@ -275,7 +289,8 @@ def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
         None if v_rapid is None else dc * v_rapid ** 2, None, bool(fits_viscous is not False),
         "hydrostatic guides or a viscous damper in the feed direction: damps in every regime, "
         "resists feeding with dC v" + ("" if budget is not None else
-                                       " (no torque limits given: the thrust is not checked)")))
+                                       " (no torque limits given: the thrust is not checked)"),
+        damps_while_feeding=True, fits_thrust=fits_viscous))
     if amplitude is None or frequency is None or not contact_stiffness:
         return tuple(out)
     level = _friction_damper_level(dc, amplitude, frequency, contact_stiffness)
@@ -283,21 +298,44 @@ def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
         out.append(CRealisation(
             "friction damper", dc, None, None, None, None, None, False,
             f"no friction level reaches {dc:.3g} N s/m at the pad amplitude {amplitude:.3g} m "
-            f"(the most is k/(pi w) = {contact_stiffness / (math.pi * frequency):.3g} N s/m)"))
+            f"(the most is k/(pi w) = {contact_stiffness / (math.pi * frequency):.3g} N s/m)",
+            damps_while_feeding=False))
         return tuple(out)
     lugre_level = _lugre_damper_level(dc, amplitude, frequency, contact_stiffness, level)
-    fits = None
+    fits_thrust = None
     if budget is not None:
-        fits = all(x.fits for x in budget.cases(sigma2, extra_friction=lugre_level or level))
+        fits_thrust = all(x.fits for x in budget.cases(sigma2,
+                                                       extra_friction=lugre_level or level))
+    at = {k: _jenkins_ceq(level, k * amplitude, frequency, contact_stiffness)
+          for k in (0.25, 3.0)}
+    why_not = []
+    if feeding:
+        why_not.append("it does not damp while feeding (its force keeps its sign), where the "
+                       "design's feeding claims rely on C: a viscous element is needed there")
+    if fits_thrust is False:
+        why_not.append("the thrust budget does not hold with its friction")
     out.append(CRealisation(
         "friction damper", dc, level, None if v_feed is None else level * v_feed, level,
-        None if v_rapid is None else level * v_rapid, level, bool(fits is not False),
+        None if v_rapid is None else level * v_rapid, level,
+        bool(fits_thrust is not False) and not feeding,
         f"a preloaded friction pad of {level:.4g} N (LuGre describing function: "
         f"{'n/a' if lugre_level is None else f'{lugre_level:.4g}'} N) on a contact of "
         f"{contact_stiffness:.3g} N/m gives Ceq = dC at A = {amplitude:.3g} m and "
-        f"{frequency / (2 * math.pi):.1f} Hz; it damps only while the pads vibrate beyond "
-        f"{level / contact_stiffness:.3g} m and reverse (standing), not while feeding"))
+        f"{frequency / (2 * math.pi):.1f} Hz, but {at[0.25]:.3g} N s/m at a quarter and "
+        f"{at[3.0]:.3g} N s/m at three times that amplitude; it damps only while the pads "
+        f"vibrate beyond {level / contact_stiffness:.3g} m and reverse (standing)"
+        + (f"; does not fit: {'; '.join(why_not)}" if why_not else ""),
+        damps_while_feeding=False, fits_thrust=fits_thrust))
     return tuple(out)
+
+
+def _jenkins_ceq(level: float, amplitude: float, omega: float, stiffness: float) -> float:
+    """Equivalent damping [N s/m] of an elasto-plastic (Jenkins) element of slip force
+    ``level`` and stiffness ``stiffness`` at amplitude [m] and angular frequency [rad/s]:
+    4 F (A - F/k) / (pi w A^2) once it slips (A > F/k), else 0 (the module docstring)."""
+    if amplitude <= level / stiffness:
+        return 0.0
+    return 4.0 * level * (amplitude - level / stiffness) / (math.pi * omega * amplitude ** 2)
 
 
 def _lugre_damper_level(dc, amplitude, omega, stiffness, guess) -> float | None:

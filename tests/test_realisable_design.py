@@ -282,3 +282,49 @@ def test_the_multi_model_optimum_beats_every_single_regime_design_in_the_worst_c
     tuned = worst(multi.design)
     assert tuned <= min(singles) * (1 + 1e-6)
     assert tuned <= grid_best * (1 + 1e-3)
+
+
+# ------------------------------------------------------------------- what realises C
+def _jenkins_dissipation(level, stiffness, amplitude, steps=200_000):
+    """Energy [J] an elasto-plastic element dissipates over one cycle of x = A sin(t), by
+    stepping its slider (the spring force clipped at the slip force) and summing F dx."""
+    t = np.linspace(0.0, 4.0 * np.pi, 2 * steps + 1)  # two cycles: the first settles
+    x = amplitude * np.sin(t)
+    slider = 0.0
+    forces = np.empty_like(x)
+    for i, xi in enumerate(x):
+        f = stiffness * (xi - slider)
+        if abs(f) > level:
+            slider = xi - math.copysign(level, f) / stiffness
+            f = math.copysign(level, f)
+        forces[i] = f
+    half = steps
+    work = np.sum(0.5 * (forces[half + 1:] + forces[half:-1]) * np.diff(x[half:]))
+    return work
+
+
+def test_a_friction_damper_realises_c_at_the_process_amplitude_only_and_never_while_feeding():
+    # the level it reports gives Ceq = dC at the process amplitude by the hysteresis loop's
+    # area (W = pi w A^2 Ceq), summed here step by step; a quarter and three times the
+    # amplitude give other Ceq (stated); an axis that also feeds cannot rely on it
+    from servotune.thrust import c_realisations
+
+    amplitude, omega, k, sigma2, c = 2e-7, 2 * math.pi * 60.0, 1.4e9, 5578.0, 9578.0
+    standing_only = Operation(standing=True, rapid_speed=0.5)
+    options = {o.option: o for o in c_realisations(None, c, sigma2, amplitude, omega, k,
+                                                   standing_only)}
+    damper = options["friction damper"]
+    w = _jenkins_dissipation(damper.friction_level, k, amplitude)
+    assert w / (math.pi * omega * amplitude ** 2) == pytest.approx(c - sigma2, rel=1e-3)
+    assert damper.fits and not damper.damps_while_feeding
+    for factor in (0.25, 3.0):
+        a = factor * amplitude
+        ceq = _jenkins_dissipation(damper.friction_level, k, a) / (math.pi * omega * a ** 2)
+        assert f"{ceq:.3g} N s/m" in damper.note
+    feeding = Operation(feed_speeds=(0.02,), standing=True, rapid_speed=0.5)
+    options = {o.option: o for o in c_realisations(None, c, sigma2, amplitude, omega, k,
+                                                   feeding)}
+    assert not options["friction damper"].fits
+    assert "does not damp while feeding" in options["friction damper"].note
+    assert options["viscous element"].fits  # no torque limits: only the regimes judged
+    assert options["viscous element"].force_feed == pytest.approx((c - sigma2) * 0.02)
