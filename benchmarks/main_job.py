@@ -66,8 +66,11 @@ import os  # noqa: E402
 
 _THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 _ENV_GIVEN = {_var: os.environ.get(_var) for _var in _THREAD_VARS}
-for _var in _THREAD_VARS:
-    os.environ.setdefault(_var, "1")
+# a child run with --blas-threads default keeps the environment as given
+_BLAS_MARK = "SERVOTUNE_BENCHMARK_BLAS_THREADS"
+if os.environ.get(_BLAS_MARK) != "default":
+    for _var in _THREAD_VARS:
+        os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
 import json  # noqa: E402
@@ -259,6 +262,7 @@ def _child(args, workers: int, jit: bool) -> dict:
         cmd.append("--no-plots")
     env = dict(os.environ)
     if args.blas_threads == "default":  # as the command runs: the environment as given
+        env[_BLAS_MARK] = "default"
         for var, value in _ENV_GIVEN.items():
             if value is None:
                 env.pop(var, None)
