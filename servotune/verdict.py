@@ -479,10 +479,14 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         "linear: stability, Ms of both loops, loop hierarchy, Ti vs velocity bandwidth, thrust "
         "budget "
         "and the compliance peak in every regime model, on dense grids with python-control",
-        "nonlinear: LuGre friction at every pad, sine sweeps over "
-        + ", ".join(f"{v.band_hz[0]:.3g}-{v.band_hz[1]:.3g} Hz ({v.name})" for v in verdicts)
-        + f" at {', '.join(f'{f:.3g}' for f in (forces or [process * k for k in FORCE_LEVELS]))}"
-          " N p-p; stick-slip runs at each feed speed")
+        "nonlinear: LuGre friction at every pad, sine sweeps "
+        + "; ".join(f"{v.name} over {v.band_hz[0]:.3g}-{v.band_hz[1]:.3g} Hz at "
+                    + ", ".join(f"{f:.3g}" for f in sorted({s.force_pp for s in v.simulations
+                                                            if s.kind == "sweep"
+                                                            and s.design == "after"}))
+                    + " N p-p" for v in verdicts)
+        + ("; stick-slip runs at each feed speed" if any(v.speed > 0 for v in verdicts)
+           else ""))
     not_checked = (
         "the friction spread in the time simulation (only the nominal friction is simulated; "
         "the spread enters the linear models)",

@@ -283,6 +283,26 @@ def test_help_and_argument_errors_load_no_numerics():
     assert run.stderr.strip().splitlines()[-1] == "[0, 2, 2] []"
 
 
+@pytest.mark.parametrize("given", [None, "2"])
+def test_the_command_runs_blas_on_one_thread_unless_told_otherwise(given, tmp_path):
+    # numpy reads the thread count when it is loaded: the command sets it before, and keeps
+    # the user's own setting
+    import os
+
+    from servotune.cli import THREAD_VARIABLES
+
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    code = ("import os, sys\nfrom servotune.cli import main\n"
+            f"code = main(['twomass', '--no-plots', '--out', {str(tmp_path)!r}])\n"
+            "print(code, 'numpy' in sys.modules, os.environ['OPENBLAS_NUM_THREADS'],"
+            " os.environ['OMP_NUM_THREADS'], file=sys.stderr)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env=env)
+    assert run.stderr.strip().splitlines()[-1] == f"0 True {given or '1'} 1"
+
+
 def test_import_servotune_is_lazy_but_complete():
     code = ("import sys, servotune as st\n"
             "assert 'control' not in sys.modules and 'numpy' not in sys.modules\n"
