@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 
 from servotune import frequency
 from servotune.axis import load_axis
-from servotune.drive import PIController, Sampling, cascade_response, pade_delay, pade_order
+from servotune.drive import Sampling, cascade_response, pade_delay, pade_order
 from servotune.friction import LuGreParameters
 from servotune.plant import Contact, loop_transfer
 from servotune.regimes import Operation, RegimeModel

@@ -23,7 +23,7 @@ __all__ = ["main", "build_parser", "COMMANDS", "SUMMARIES"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
 COMMANDS = ("init", "twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "tune",
-            "table3", "verify")
+            "table3", "verify", "study")
 
 # one line per subcommand for ``servotune --help`` without importing every module (a command
 # missing here is imported to list it); tests/test_cli.py checks them against the modules
@@ -41,6 +41,7 @@ SUMMARIES = {
     "tune": "tune guide-way damping C, Kv and the velocity PI (casadi), verify",
     "table3": "simulate the paper's Table 3 (sine sweeps with LuGre friction)",
     "verify": "does the nonlinear axis (LuGre) do what a tuned design claims?",
+    "study": "an axis sampled over what varies, tuned/verified per sample on dask.distributed",
 }
 
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report it

@@ -1,0 +1,117 @@
+"""``servotune study STUDY.toml``: an axis sampled over what varies, on dask.distributed."""
+
+from __future__ import annotations
+
+import re
+
+from ._common import (
+    WORKERS,
+    CliError,
+    add_common_options,
+    default_workers,
+    print_json,
+)
+
+__all__ = ["add_parser", "run"]
+
+_ADDRESS = re.compile(r"^(tcp|tls|inproc|ucx|ws|wss)://[^\s]+$")
+
+
+def _scheduler(text: str) -> str:
+    import argparse
+
+    if not _ADDRESS.match(text):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a scheduler address: give e.g. tcp://10.0.0.5:8786 (as "
+            "'dask scheduler' prints it)")
+    return text
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "study", help="a study: an axis sampled over what varies (friction spread, gains, "
+                      "axes), tuned, verified or analysed per sample on dask.distributed",
+        description="Run a study file (TOML: [study] name, axes, compute = tune, verify, "
+                    "lobes, compliance, samples, seed; [vary.\"section.key\"] a list, a grid "
+                    "or a distribution per varied axis.toml field; see servotune.study.spec). "
+                    "Every finished sample is written at once to OUT/study_<name>/rows/ "
+                    "(Parquet); a re-run skips what is done; results.parquet and summary.html "
+                    "hold the whole study. Without --scheduler the samples run on a local "
+                    "cluster of --workers processes. Exit status 0 when every sample ran "
+                    "(failed samples are rows with their reason), 1 for a bad study file, "
+                    "130 interrupted (the rows written stay).")
+    p.add_argument("study", help="study file (TOML)")
+    p.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
+                   help="address of a running dask scheduler (tcp://host:8786); default a "
+                        "local cluster on this machine")
+    p.add_argument("--workers", type=WORKERS, default=None, metavar="N",
+                   help="worker processes of the local cluster (default: the CPUs this "
+                        "process may use)")
+    add_common_options(p, plots=True)
+    p.set_defaults(func=run)
+
+
+class _Written:
+    """What the interruption message reads: the study folder, and whether rows are in it."""
+
+    def __init__(self, path):
+        self.path = path
+        self.committed = False
+
+
+def run(args) -> int:
+    from .. import progress
+    from ..study import (
+        StudyFolderError,
+        StudyFormatError,
+        load_study,
+        run_study,
+        study_folder,
+        write_summary,
+    )
+
+    try:
+        study = load_study(args.study)
+    except StudyFormatError as exc:
+        raise CliError(str(exc)) from None
+    if args.scheduler and args.workers:
+        raise CliError("--workers sizes the local cluster; a cluster at --scheduler has its own "
+                       "workers: give one of them")
+    workers = args.workers or default_workers()
+    folder = study_folder(study, args.out)
+    written = _Written(folder)
+    args.run_output = written
+    n = len(study.sample_list())
+
+    def row_written(_row):
+        written.committed = True
+
+    with progress.task(f"study {study.name}: {n} samples", total=n, unit="sample") as task:
+        try:
+            result = run_study(study, args.out, scheduler=args.scheduler, workers=workers,
+                               progress=task.report, on_row=row_written)
+        except StudyFolderError as exc:
+            raise CliError(str(exc)) from None
+    summary, files = write_summary(study, result, plots=not args.no_plots)
+    out = {"study": study.name, "folder": str(result.folder), "run": result.to_dict(),
+           "summary": summary.to_dict(),
+           "files": [str(p.relative_to(result.folder)) for p in files]
+           + ["results.parquet", "rows/"]}
+    if args.json:
+        print_json(out)
+        return 0
+    share = summary.verified_share
+    print(f"study {study.name}: {summary.done} of {summary.samples} samples done, "
+          f"{summary.failed} failed" + ("" if share is None else
+                                        f", {summary.verified} verified ({share:.0%})"))
+    print(f"  this run: {result.computed} computed, {result.skipped} already done, "
+          f"{result.wall_time:.1f} s on {result.scheduler} "
+          f"({result.throughput:.3g} samples/s)")
+    for key, s in summary.spreads.items():
+        print(f"  {key:28} min {s['min']:.4g}  median {s['median']:.4g}  max {s['max']:.4g}")
+    for sample_id, error in summary.failures[:5]:
+        print(f"  failed: sample {sample_id}: {error}")
+    if len(summary.failures) > 5:
+        print(f"  ... {len(summary.failures) - 5} more failures in summary.html")
+    print(f"  wrote {result.folder} (results.parquet, summary.html, rows/)")
+    return 0

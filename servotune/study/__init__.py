@@ -1,0 +1,29 @@
+"""Studies at scale: an axis (or several) sampled over what varies, each sample tuned,
+verified, or analysed as a task on dask.distributed, every row written as it completes.
+
+>>> from servotune.study import DISTRIBUTIONS
+>>> sorted(DISTRIBUTIONS)
+['loguniform', 'lognormal', 'normal', 'triangular', 'uniform']
+"""
+
+from .runner import StudyFolderError, StudyRun, read_rows, run_study, study_folder
+from .spec import (
+    COMPUTE,
+    DISTRIBUTIONS,
+    Sample,
+    Study,
+    StudyFormatError,
+    Variation,
+    apply_values,
+    load_study,
+)
+from .summary import StudySummary, summarise, summary_html, write_summary
+from .tasks import run_sample
+
+__all__ = [
+    "Study", "Variation", "Sample", "StudyFormatError", "load_study", "apply_values",
+    "COMPUTE", "DISTRIBUTIONS",
+    "run_sample",
+    "StudyRun", "StudyFolderError", "run_study", "study_folder", "read_rows",
+    "StudySummary", "summarise", "summary_html", "write_summary",
+]
