@@ -110,8 +110,28 @@ def jit_options() -> dict:
                     None)
     if compiler is None:
         return {}
+    folder = _jit_folder()
     return {"jit": True, "compiler": "shell",
-            "jit_options": {"compiler": compiler, "flags": ["-O1"], "verbose": False}}
+            "jit_options": {"compiler": compiler, "flags": ["-O1"], "verbose": False,
+                            "directory": folder + os.sep}}
+
+
+_JIT_FOLDER: list[str] = []
+
+
+def _jit_folder() -> str:
+    """A temporary folder of this process for the generated C and the compiled objects
+    (casadi writes them into the working folder otherwise, where a killed run leaves them),
+    removed when the process ends."""
+    if not _JIT_FOLDER:
+        import atexit
+        import shutil
+        import tempfile
+
+        folder = tempfile.mkdtemp(prefix="servotune-jit-")
+        atexit.register(shutil.rmtree, folder, True)
+        _JIT_FOLDER.append(folder)
+    return _JIT_FOLDER[0]
 
 
 class Kernels:
