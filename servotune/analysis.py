@@ -47,7 +47,25 @@ def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
 
     ``viscous`` uses ``c`` [N s/m] when given, else the axis' viscous-only value; ``equivalent``
     needs the vibration ``amplitude`` [m] and ``frequency_hz``; ``sliding`` the ``speed`` [m/s].
+
+    Raises
+    ------
+    ValueError
+        A parameter the kind needs is missing, or one is given that the kind does not use
+        (the message names the parameters of this function).
     """
+    uses = {"c": "viscous", "amplitude": "equivalent", "frequency_hz": "equivalent",
+            "speed": "sliding"}
+    for name, value in (("c", c), ("amplitude", amplitude), ("frequency_hz", frequency_hz),
+                        ("speed", speed)):
+        if value is not None and kind != uses[name]:
+            raise ValueError(f"{name} is a parameter of the {uses[name]!r} contact; it has no "
+                             f"meaning for the {kind!r} contact")
+    if kind == "equivalent" and (amplitude is None or frequency_hz is None):
+        raise ValueError("the 'equivalent' contact needs the vibration amplitude [m] and "
+                         "frequency_hz [Hz] of the describing function")
+    if kind == "sliding" and not speed:
+        raise ValueError("the 'sliding' contact needs a non-zero sliding speed [m/s]")
     if axis.friction is None:
         if kind == "free":
             return Contact.free()

@@ -23,6 +23,19 @@ or FE matrices in any format of :mod:`servotune.structure.io`, optionally reduce
     dof_map = "dofs.csv"
     reduce = { boundary = ["pad1.x", "wp.x"], n_modes = 30 }   # or f_max_hz = 500.0
 
+An FE export names its rows by node and direction (a DOF map with ``node`` and ``dof``
+columns); ``ports`` gives the few DOFs the analyses need their names (``pad1.x``, ``wp.x``,
+``motor.rotor``, ``encoder.x``) by node number or by position, as
+:mod:`servotune.structure.ports` does for ``servotune check --ports``::
+
+    coordinates = "nodes.csv"     # node,x,y,z [m]; needed for ports given by position
+    port_tolerance = 1e-3         # [m], largest distance of a port's position to its node
+    [structure.ports]
+    "pad1.x" = { node = 101, direction = "x" }        # x/y/z/rx/ry/rz, or UX, ROTX, 1-6
+    "wp.x" = { position = [0.0, 0.0, 0.8], direction = "UX" }
+
+(or ``ports = "ports.csv"``, a file ``port,node,direction`` or ``port,x,y,z,direction``).
+
 Every error names the file, the field and what to do about it.
 """
 
@@ -51,17 +64,23 @@ from .friction.lugre import LuGreParameters
 from .plant import GuideWayFriction
 from .regimes import Operation
 from .requirements import Requirements
-from .structure.io import MatrixFileError, read_structure
+from .structure.io import MatrixFileError, read_coordinates, read_structure
 from .structure.model import ModalModel, UnknownDofError
+from .structure.ports import Port, PortError, name_ports, read_ports
 from .structure.reduction import craig_bampton
 
 __all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis",
-           "axis_from_tables"]
+           "axis_from_tables", "structure_matrices"]
 
 SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "operation", "requirements",
             "tuning")
-_STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce"}
+_STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce",
+                   "coordinates", "ports", "port_tolerance"}
 _REDUCE_KEYS = {"boundary", "n_modes", "f_max_hz"}
+_PORT_KEYS = {"node", "position", "direction"}
+_PORT_FIX = ('name each port by node and direction, "pad1.x" = { node = 101, direction = "x" }, '
+             'or by position [m], { position = [x, y, z], direction = "x" } with coordinates = '
+             '"nodes.csv" (directions x, y, z, rx, ry, rz, or UX ... ROTZ, or 1-6)')
 
 
 class AxisFormatError(ValueError):
@@ -226,6 +245,47 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
                        and math.isfinite(z) and 0 <= z < 1 for z in values)):
         raise _err(file, "[structure] modal_damping", f"got {zeta!r}",
                    "give a damping ratio in [0, 1) such as 0.03, or a list with one per mode")
+    matrices = _read_matrices(table, folder, file)
+    try:
+        if "reduce" in table:
+            spec = table["reduce"]
+            if not isinstance(spec, dict) or set(spec) - _REDUCE_KEYS or "boundary" not in spec:
+                raise _err(file, "[structure] reduce", f"got {spec!r}",
+                           "give reduce = { boundary = [DOF names], n_modes = N } "
+                           "(or f_max_hz = F instead of n_modes)")
+            boundary = list(spec["boundary"])
+            index = matrices.index(boundary)
+            return craig_bampton(matrices.mass, matrices.stiffness, index,
+                                 n_modes=spec.get("n_modes"), f_max_hz=spec.get("f_max_hz"),
+                                 damping_ratio=zeta, boundary_names=boundary)
+        return matrices.to_modal_model(damping_ratio=zeta)
+    except UnknownDofError as exc:
+        raise _err(file, "[structure] reduce.boundary", str(exc),
+                   "use names of the DOF map or of [structure] ports") from None
+    except AxisFormatError:
+        raise
+    except ValueError as exc:
+        raise _err(file, "[structure]", str(exc), "fix the matrices or the settings") from None
+
+
+def structure_matrices(axis: Axis):
+    """The matrices of an axis' ``[structure]`` as read, with its ports named, before any
+    reduction: what a reduction on loading is checked against.
+
+    Returns
+    -------
+    servotune.structure.StructureMatrices
+
+    Raises
+    ------
+    AxisFormatError
+        As :func:`load_axis` for ``[structure]``.
+    """
+    return _read_matrices(axis.tables["structure"], axis.path, axis.file)
+
+
+def _read_matrices(table, folder: Path, file: Path):
+    """The checked matrices of ``[structure]`` with their DOF names (ports named)."""
     if "file" in table:
         if "mass" in table or "stiffness" in table:
             raise _err(file, "[structure]", "both file and mass/stiffness are given",
@@ -243,10 +303,16 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
             raise _err(file, key, f"{p} does not exist",
                        "check the name (paths are relative to the axis folder)")
     dof_map = folder / str(table["dof_map"]) if "dof_map" in table else None
+    if dof_map is not None and not dof_map.is_file():
+        raise _err(file, "[structure] dof_map", f"{dof_map} does not exist",
+                   "check the name (paths are relative to the axis folder)")
+    ports = _ports(table, folder, file)
     try:
         matrices = read_structure(paths["mass"], paths.get("stiffness"), dof_map)
     except MatrixFileError as exc:
         raise _err(file, key, str(exc), "fix or re-export the matrix files") from None
+    if ports is not None:
+        matrices = _name_ports(matrices, ports, dof_map or paths["mass"], file)
     for label, matrix, limit, unit in (("mass", matrices.mass, 1e9, "kg (or kg m^2)"),
                                        ("stiffness", matrices.stiffness, 1e16,
                                         "N/m (or N m/rad)")):
@@ -254,26 +320,105 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
         if not top <= limit:
             raise _err(file, key, f"the {label} matrix holds {top:.3g} {unit}, beyond the "
                        f"plausible {limit:g}", "check the units of the export (SI: kg, N/m)")
+    return matrices
+
+
+def _ports(table, folder: Path, file: Path):
+    """``[structure] ports``, ``coordinates`` and ``port_tolerance``: the ports (a table or a
+    ports CSV, see :mod:`servotune.structure.ports`), the node coordinates [m] (None when not
+    given) and the tolerance [m]; None without ports."""
+    for key in ("coordinates", "port_tolerance"):
+        if key in table and "ports" not in table:
+            raise _err(file, f"[structure] {key}", "given without ports (it serves only to find "
+                       "ports given by position)", f"add [structure.ports] or remove {key}")
+    if "ports" not in table:
+        return None
+    if "file" not in table and "dof_map" not in table:
+        raise _err(file, "[structure] ports", "the matrices have no DOF map to name ports in",
+                   'add dof_map = "dofs.csv" (columns node, dof: the rows of the export by node '
+                   "number and direction)")
+    spec = table["ports"]
+    if isinstance(spec, str):
+        path = folder / spec
+        if not path.is_file():
+            raise _err(file, "[structure] ports", f"{path} does not exist",
+                       "check the name (paths are relative to the axis folder)")
+        try:
+            ports = read_ports(path)
+        except PortError as exc:
+            raise _err(file, "[structure] ports", str(exc),
+                       "give a CSV port,node,direction (or port,x,y,z,direction [m])") from None
+    elif isinstance(spec, Mapping) and spec:
+        ports = tuple(_port(name, value, file) for name, value in spec.items())
+    else:
+        raise _err(file, "[structure] ports", f"got {spec!r}", f"give a table of ports: {_PORT_FIX}"
+                   ', or the name of a ports CSV (ports = "ports.csv")')
+    coordinates = None
+    if "coordinates" in table:
+        value = table["coordinates"]
+        path = folder / value if isinstance(value, str) else None
+        if path is None or not path.is_file():
+            raise _err(file, "[structure] coordinates",
+                       f"{path} does not exist" if path is not None else f"got {value!r}",
+                       'give the node coordinates file, coordinates = "nodes.csv" (columns node, '
+                       "x, y, z [m]; relative to the axis folder)")
+        try:
+            coordinates = read_coordinates(path)
+        except MatrixFileError as exc:
+            raise _err(file, "[structure] coordinates", str(exc),
+                       "give a CSV with a header node,x,y,z and one row per node [m]") from None
+    else:
+        by_position = [p.name for p in ports if p.position is not None]
+        if by_position:
+            raise _err(file, "[structure] coordinates", f"missing: ports {by_position} are "
+                       "given by position", 'add coordinates = "nodes.csv" (columns node, x, y, '
+                       "z [m]) or give those ports by node number")
+    tolerance = _number(table, "port_tolerance", file, "structure", 1e-3, low=1e-9, high=10.0,
+                        unit="m")
+    return ports, coordinates, tolerance
+
+
+def _port(name, spec, file: Path) -> Port:
+    """One port of ``[structure.ports]``: ``{ node = N, direction = D }`` or
+    ``{ position = [x, y, z], direction = D }``."""
+    field = f'[structure.ports] "{name}"'
+    if not isinstance(spec, Mapping):
+        raise _err(file, field, f"got {spec!r}", _PORT_FIX)
+    unknown = set(spec) - _PORT_KEYS
+    if unknown or "direction" not in spec:
+        problem = (f"unknown keys {sorted(unknown)}" if unknown else "no direction")
+        raise _err(file, field, problem, _PORT_FIX)
+    node, position = spec.get("node"), spec.get("position")
+    if node is not None and (isinstance(node, bool) or not isinstance(node, (int, str))
+                             or not str(node).strip()):
+        raise _err(file, f"{field} node", f"got {node!r}",
+                   "give the node number of the export (e.g. node = 101)")
+    if position is not None and (
+            not isinstance(position, (list, tuple)) or len(position) != 3
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       and math.isfinite(v) for v in position)):
+        raise _err(file, f"{field} position", f"got {position!r}",
+                   "give three coordinates [m], position = [x, y, z]")
+    if not isinstance(spec["direction"], (str, int)) or isinstance(spec["direction"], bool):
+        raise _err(file, f"{field} direction", f"got {spec['direction']!r}", _PORT_FIX)
     try:
-        if "reduce" in table:
-            spec = table["reduce"]
-            if not isinstance(spec, dict) or set(spec) - _REDUCE_KEYS or "boundary" not in spec:
-                raise _err(file, "[structure] reduce", f"got {spec!r}",
-                           "give reduce = { boundary = [DOF names], n_modes = N } "
-                           "(or f_max_hz = F instead of n_modes)")
-            boundary = list(spec["boundary"])
-            index = matrices.index(boundary)
-            return craig_bampton(matrices.mass, matrices.stiffness, index,
-                                 n_modes=spec.get("n_modes"), f_max_hz=spec.get("f_max_hz"),
-                                 damping_ratio=zeta, boundary_names=boundary)
-        return matrices.to_modal_model(damping_ratio=zeta)
-    except UnknownDofError as exc:
-        raise _err(file, "[structure] reduce.boundary", str(exc),
-                   "use names of the DOF map") from None
-    except AxisFormatError:
-        raise
-    except ValueError as exc:
-        raise _err(file, "[structure]", str(exc), "fix the matrices or the settings") from None
+        return Port(name, spec["direction"], node, position)
+    except PortError as exc:
+        raise _err(file, field, str(exc), _PORT_FIX) from None
+
+
+def _name_ports(matrices, ports, source: Path, file: Path):
+    """The matrices with the ports' rows renamed (:func:`~servotune.structure.name_ports`)."""
+    import dataclasses
+
+    ports, coordinates, tolerance = ports
+    try:
+        dofs = name_ports(matrices.dofs, ports, coordinates, tolerance)
+    except PortError as exc:
+        raise _err(file, "[structure] ports", str(exc),
+                   f"ports name rows of the DOF map {source} (<node>.<direction>) by node "
+                   "number or position and direction") from None
+    return dataclasses.replace(matrices, dofs=dofs)
 
 
 def _largest(matrix) -> float:
@@ -397,9 +542,30 @@ def _drive(data, structure, file, defaults) -> Drive | None:
                    ("encoder", "feedforward", "filters", "sampling"))
     if table is None:
         return None
-    motor = _table(table, "motor", file, _MOTOR_KEYS,
-                   ("rotor", "stator", "rotor_inertia", "torque_max", "torque_peak",
-                    "torque_continuous", "speed_max_rpm"))
+    # [drive.motor] checked here so that its messages name the section as the file does;
+    # torque_max, the older name of torque_peak, is accepted but not offered
+    motor_optional = ("rotor", "stator", "rotor_inertia", "torque_peak", "torque_continuous",
+                      "speed_max_rpm")
+    if not isinstance(table["motor"], dict):
+        raise _err(file, "[drive.motor]", f"got {table['motor']!r}", "make [drive.motor] a table")
+    motor_unknown = sorted(set(table["motor"]) - set(_MOTOR_KEYS) - set(motor_optional)
+                           - {"torque_max"})
+    if motor_unknown:
+        import difflib
+
+        valid = sorted(set(_MOTOR_KEYS) | set(motor_optional))
+        guesses = [f"{m[0]!r}" + (f" for {k!r}" if len(motor_unknown) > 1 else "")
+                   for k in motor_unknown if (m := difflib.get_close_matches(k, valid, n=1))]
+        raise _err(file, "[drive.motor]", (f"unknown key {motor_unknown[0]!r}"
+                                           if len(motor_unknown) == 1 else
+                                           f"unknown keys {motor_unknown}")
+                   + (f" (did you mean {', '.join(guesses)}?)" if guesses else ""),
+                   f"use {valid} (check the spelling)")
+    motor_missing = [k for k in _MOTOR_KEYS if k not in table["motor"]]
+    if motor_missing:
+        raise _err(file, "[drive.motor]", f"missing {motor_missing}",
+                   "add them from the motor data sheet (see `servotune init`)")
+    motor = _table(table, "motor", file, _MOTOR_KEYS, (*motor_optional, "torque_max"))
     trans = _table(table, "transmission", file, ("ratio",), ("lead", "belt_ratio"))
     current = _table(table, "current_loop", file, ("kp", "ti"))
     velocity = _table(table, "velocity_loop", file, ("kp", "ti"))
@@ -490,28 +656,55 @@ _SAMPLING_KEYS = ("current_period", "velocity_period", "position_period", "compu
 
 
 def _sampling(table, file, defaults) -> Sampling:
-    """``[drive.sampling]``: the digital drive (defaults of current industrial drives)."""
-    sampling = _table(table, "sampling", file, (), _SAMPLING_KEYS)
+    """``[drive.sampling]``: the digital drive (defaults of current industrial drives).
+
+    Sample periods must be > 0 (a continuous drive is ``continuous = true``, not a zero
+    period): current and velocity periods in [1e-6, 0.01] s, the position period in
+    [1e-6, 0.1] s; ``computation_delay`` 0 or in [0.1, 10] sample periods (a value below 0.1
+    is a delay given in seconds); ``speed_filter`` in [0, 0.05] s (0: none; drives smooth the
+    measured speed over at most tens of ms).
+    """
+    section = "drive.sampling"
+    sampling = table.get("sampling")
     if sampling is None:
         defaults.append("[drive.sampling] absent: a digital drive with current and velocity "
                         "loops at 125 us, the position loop at 1 ms and one period of "
                         "computation delay (set continuous = true for the paper's continuous "
                         "drive)")
         return Sampling()
-    if _bool(sampling, "continuous", file, "drive.sampling", False):
+    if not isinstance(sampling, dict):
+        raise _err(file, f"[{section}]", f"got {sampling!r}", f"make [{section}] a table")
+    unknown = sorted(set(sampling) - set(_SAMPLING_KEYS))
+    if unknown:
+        raise _err(file, f"[{section}]", f"unknown keys {unknown}",
+                   f"use {sorted(_SAMPLING_KEYS)} (check the spelling)")
+    if _bool(sampling, "continuous", file, section, False):
         if set(sampling) - {"continuous"}:
-            raise _err(file, "[drive.sampling]", "continuous = true with sample periods",
+            raise _err(file, f"[{section}]", "continuous = true with sample periods",
                        "give either continuous = true or the periods")
         return Sampling.continuous()
     kwargs = {}
-    for key in ("current_period", "velocity_period", "position_period", "speed_filter"):
+    for key, high in (("current_period", 0.01), ("velocity_period", 0.01),
+                      ("position_period", 0.1)):
         if key in sampling:
-            kwargs[key] = _number(sampling, key, file, "drive.sampling", positive=False,
-                                  low=0.0, high=0.1, unit="s")
+            value = sampling[key]
+            if (isinstance(value, (int, float)) and not isinstance(value, bool)
+                    and math.isfinite(value) and value <= 0):
+                raise _err(file, f"[{section}] {key}", f"got {value!r}, but a sample period "
+                           "must be > 0", "give the period in seconds (e.g. 125e-6), or "
+                           "continuous = true (and no periods) for a continuous drive")
+            kwargs[key] = _number(sampling, key, file, section, low=1e-6, high=high, unit="s")
     if "computation_delay" in sampling:
-        kwargs["computation_delay"] = _number(sampling, "computation_delay", file,
-                                              "drive.sampling", positive=False, low=0.0,
-                                              high=10.0, unit="sample periods")
+        delay = _number(sampling, "computation_delay", file, section, positive=False,
+                        low=0.0, high=10.0, unit="sample periods")
+        if 0.0 < delay < 0.1:
+            raise _err(file, f"[{section}] computation_delay", f"got {delay!r}",
+                       "it counts sample periods, not seconds: give 0 or a value in [0.1, 10] "
+                       "(typically 0.5 to 2)")
+        kwargs["computation_delay"] = delay
+    if "speed_filter" in sampling:
+        kwargs["speed_filter"] = _number(sampling, "speed_filter", file, section,
+                                         positive=False, low=0.0, high=0.05, unit="s")
     return Sampling(**kwargs)
 
 

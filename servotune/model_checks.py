@@ -15,27 +15,44 @@ wrong and the fix:
 * :func:`band_coverage`: whether the kept fixed-interface modes of a reduced structure cover
   the requirements' band with a margin (see :func:`servotune.structure.mode_coverage`).
 
+:func:`axis_model_checks` runs both on an :class:`~servotune.axis.Axis`, as ``servotune tune``
+and ``servotune bode`` do when they load it: a transmission that fails (a flipped direction, a
+ratio off by more than the tolerance, an encoder the motor does not move) is an error
+(:class:`ModelCheckError`, raised by :meth:`AxisModelChecks.require` before any tuning), a band
+the kept modes do not cover a warning. Both are static: one solve with the stiffness and the
+kept modes' frequencies.
+
 The static motion: the rotor is turned by 1 rad with the stator held (or grounded), no other
-load, and K_ff u_f = -K_fr solved for the remaining DOFs f (a least-squares solution if the
-structure can still move; the encoder's motion is then checked to be determined).
+load, and K_ff u_f = -K_fr solved for the remaining DOFs f (by Cholesky; a least-squares
+solution if the structure can still move; the encoder's motion is then checked to be
+determined).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.linalg
 
 from .drive import Drive
 from .requirements import Requirements
 from .structure.coverage import DEFAULT_MARGIN, BandCoverage, mode_coverage
 from .structure.model import ModalModel
+from .structure.ports import normalise_direction
+
+if TYPE_CHECKING:
+    from .axis import Axis
 
 __all__ = [
     "TRANSMISSION_TOLERANCE",
+    "AxisModelChecks",
     "BandCoverage",
+    "ModelCheckError",
     "TransmissionCheck",
+    "axis_model_checks",
     "band_coverage",
     "transmission_check",
 ]
@@ -109,6 +126,14 @@ def _static_motion(structure: ModalModel, rotor: str, stator: str | None):
     if free.size:
         k_ff = k[np.ix_(free, free)]
         rhs = -k[free, r]
+        try:  # the usual case: the held motor holds the structure (one Cholesky solve)
+            factor = scipy.linalg.cho_factor(k_ff)
+            pivots = np.abs(np.diag(factor[0])) ** 2
+            if pivots.min() > 1e-10 * max(float(np.abs(np.diag(k_ff)).max()), 1e-300):
+                u[free] = scipy.linalg.cho_solve(factor, rhs)
+                return u, determined
+        except np.linalg.LinAlgError:
+            pass
         w, v = np.linalg.eigh(k_ff)
         scale = max(float(np.abs(w).max(initial=0.0)), 1e-300)
         flexible = w > 1e-10 * scale
@@ -251,3 +276,139 @@ def band_coverage(structure: ModalModel, requirements: Requirements | tuple | No
     if len(tuple(band)) != 2 or not all(math.isfinite(float(x)) for x in band):
         raise ValueError(f"band must be (low, high) in rad/s, got {band!r}")
     return mode_coverage(structure, band, margin)
+
+
+class ModelCheckError(ValueError):
+    """An axis whose structure contradicts its drive (a flipped DOF direction, a transmission
+    ratio that disagrees with the structure): tuning or analysing it would give wrong advice.
+    The message names the DOF and the fix."""
+
+
+@dataclass(frozen=True)
+class AxisModelChecks:
+    """The model checks of an axis: its transmission and the band coverage of its structure.
+
+    Attributes
+    ----------
+    transmission : TransmissionCheck or None
+        None for an axis without a drive.
+    coverage : BandCoverage
+        The kept fixed-interface modes against ``[requirements] band_hz``.
+    source : str
+        The axis file, for messages.
+    """
+
+    transmission: TransmissionCheck | None
+    coverage: BandCoverage
+    source: str = ""
+    ports: tuple[tuple[str, str], ...] = ()
+    """(DOF name, where the export has it) of the ports of ``[structure.ports]``."""
+
+    @property
+    def errors(self) -> tuple[str, ...]:
+        """One line per failed check that makes the axis unusable (the transmission)."""
+        t = self.transmission
+        if t is None or t.passed:
+            return ()
+        what = {"flipped": "a flipped direction", "mismatch": "the transmission ratio",
+                "undetermined": "the encoder does not follow the motor"}.get(t.status, t.status)
+        where = dict(self.ports).get(t.flipped) if t.flipped else None
+        port = f" ({t.flipped} is {where} of the export)" if where else ""
+        return (f"model check ({what}; [structure] against [drive]): {t.message}{port}",)
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """One line per check that makes results less reliable (the band coverage)."""
+        return () if self.coverage.covered else (f"band coverage: {self.coverage.message}",)
+
+    def require(self) -> AxisModelChecks:
+        """These checks, or :class:`ModelCheckError` when one of them is an error.
+
+        Raises
+        ------
+        ModelCheckError
+            The transmission check failed; the message names the DOF and the fix.
+        """
+        if self.errors:
+            where = f"{self.source}: " if self.source else ""
+            raise ModelCheckError(where + "; ".join(self.errors))
+        return self
+
+    def to_dict(self) -> dict:
+        """Plain values for JSON (SI)."""
+        return {"transmission": None if self.transmission is None
+                else self.transmission.to_dict(),
+                "band_coverage": self.coverage.to_dict(),
+                "errors": list(self.errors), "warnings": list(self.warnings)}
+
+
+def axis_model_checks(axis: Axis, tolerance: float = TRANSMISSION_TOLERANCE,
+                      margin: float = DEFAULT_MARGIN) -> AxisModelChecks:
+    """The model checks of an axis: :func:`transmission_check` of its structure against its
+    drive (when it has one) and :func:`band_coverage` of its structure against its
+    requirements' band.
+
+    Parameters
+    ----------
+    axis : Axis
+    tolerance : float
+        Largest accepted |structure ratio / drive ratio - 1|.
+    margin : float
+        The kept fixed-interface modes must reach margin x the top of the band.
+
+    Returns
+    -------
+    AxisModelChecks
+        Call :meth:`~AxisModelChecks.require` to refuse an axis whose checks fail.
+
+    Examples
+    --------
+    A slide (encoder on it) geared to a rotor, r = 2 mm/rad, as the drive says; then with the
+    encoder's direction reversed, as a sign error in an export does: the encoder moves -r per
+    radian, an error (its message names the fix: reverse the DOF, not the gains).
+
+    >>> from pathlib import Path
+    >>> from servotune.axis import Axis
+    >>> from servotune.drive import Motor, PIController
+    >>> r, k = 2e-3, 1e8
+    >>> d = Drive(Motor(1.0, 1.0, 1.0, 1e-3, stator=None), ratio=r,
+    ...           current_loop=PIController(1.0), velocity_loop=PIController(1.0), kv=10.0)
+    >>> def slide(sign):
+    ...     s = ModalModel([[500.0, 0], [0, 0.01]],
+    ...                    [[k, -sign * k * r], [-sign * k * r, k * r * r]],
+    ...                    ["encoder.x", "motor.rotor"])
+    ...     return Axis("slide", "", Path("."), s, drive=d)
+    >>> axis_model_checks(slide(+1)).errors
+    ()
+    >>> checks = axis_model_checks(slide(-1))
+    >>> checks.transmission.status, round(checks.transmission.structure_ratio, 9)
+    ('flipped', -0.002)
+    >>> "reverse" in checks.errors[0] and "not the gains" in checks.errors[0]
+    True
+    """
+    transmission = None
+    if axis.drive is not None:
+        transmission = transmission_check(axis.structure, axis.drive, tolerance)
+    coverage = band_coverage(axis.structure, axis.requirements, margin)
+    return AxisModelChecks(transmission, coverage, str(axis.file), _port_places(axis))
+
+
+def _port_places(axis) -> tuple[tuple[str, str], ...]:
+    """Where the export has each port of ``[structure.ports]`` (node and direction, or the
+    position), for messages."""
+    ports = axis.tables.get("structure", {}).get("ports")
+    if not hasattr(ports, "items"):
+        return ()
+    out = []
+    for name, spec in ports.items():
+        if not hasattr(spec, "get"):
+            continue
+        direction = spec.get("direction")
+        direction = normalise_direction(direction) or direction
+        if spec.get("node") is not None:
+            place = f"node {spec['node']}, direction {direction},"
+        else:
+            place = (f"direction {direction} at the node nearest "
+                     f"{list(spec.get('position') or ())} m")
+        out.append((str(name), place))
+    return tuple(out)

@@ -27,11 +27,13 @@ class Table:
     notes: tuple[str, ...] = field(default=())
 
 
-def _f(value, fmt="{:.4g}", none="-"):
+def _f(value, fmt="{:.4g}", none="-", inf="unstable"):
+    """A value for a table: ``none`` for None, nan or -inf, ``inf`` for +inf (an unstable
+    model's peak; a margin without a crossover passes its own word)."""
     if value is None:
         return none
     if isinstance(value, float) and not math.isfinite(value):
-        return "unstable" if value > 0 else none
+        return inf if value > 0 else none
     return fmt.format(value)
 
 
@@ -174,10 +176,11 @@ def loops_table(job) -> Table | None:
         if a0 is None and a1 is None:
             continue
         rows += [(f"{loop} loop Ms", _f(a0 and a0.ms, "{:.3f}"), _f(a1 and a1.ms, "{:.3f}")),
-                 ("  phase margin [deg]", _f(a0 and a0.phase_margin_deg, "{:.1f}"),
-                  _f(a1 and a1.phase_margin_deg, "{:.1f}")),
-                 ("  gain margin [dB]", _f(a0 and a0.gain_margin_db, "{:.1f}"),
-                  _f(a1 and a1.gain_margin_db, "{:.1f}"))]
+                 ("  phase margin [deg]",
+                  _f(a0 and a0.phase_margin_deg, "{:.1f}", inf="no crossover"),
+                  _f(a1 and a1.phase_margin_deg, "{:.1f}", inf="no crossover")),
+                 ("  gain margin [dB]", _f(a0 and a0.gain_margin_db, "{:.1f}", inf="inf"),
+                  _f(a1 and a1.gain_margin_db, "{:.1f}", inf="inf"))]
         if (a0 and a0.gain_margin_lower > 0) or (a1 and a1.gain_margin_lower > 0):
             rows += [("  lower gain margin [dB]", _f(a0 and a0.gain_margin_lower_db, "{:.1f}"),
                       _f(a1 and a1.gain_margin_lower_db, "{:.1f}"))]

@@ -409,3 +409,97 @@ def test_progress_only_on_a_terminal_without_quiet_or_json(quiet, as_json, tty, 
 
     monkeypatch.setattr(sys.stderr, "isatty", lambda: tty, raising=False)
     assert show_progress(argparse.Namespace(quiet=quiet, json=as_json)) is shown
+
+
+# --- verify reads the design as tune writes it; contact flags; sampling; [drive.motor] -------
+
+def test_verify_reads_the_results_file_tune_writes(tmp_path):
+    # tune writes the design through to_jsonable: a Ti without integral action (inf) becomes
+    # null with 'ti_reason' beside it; read_result takes it back as inf
+    from servotune.cli._common import write_results
+    from servotune.cli.verify import read_result
+    from servotune.tuning import Design
+
+    design = Design(c=5578.0, kv=25.5, kp=5.85, ti=math.inf)
+    write_results(tmp_path, {"axis": "axis", "design": design.to_dict()})
+    (tmp_path / "axis").mkdir()
+    axis, values = read_result(tmp_path / "results.json")
+    assert axis == tmp_path / "axis"
+    assert values == {"c": 5578.0, "kv": 25.5, "kp": 5.85, "ti": math.inf}
+    assert Design(**values) == design
+
+
+@pytest.mark.parametrize("flag, accepted", [
+    ("--force-pp", "(0, 1e+06] N"), ("--speed", "(0, 10] m/s"),
+    ("--f-start-hz", "(0, 100000] Hz"), ("--f-end-hz", "(0, 100000] Hz")])
+def test_verify_flags_state_their_range_in_the_help(flag, accepted):
+    parser = build_parser("verify")
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    action = next(a for a in sub.choices["verify"]._actions if flag in a.option_strings)
+    assert accepted in " ".join(action.help.split())
+
+
+def test_compliance_flags_that_fit_the_contact_still_work(tmp_path, capsys):
+    for flags in (["--contact", "sliding", "--speed", "0.03"],
+                  ["--contact", "equivalent", "--amplitude", "2e-6", "--frequency-hz", "50"]):
+        assert main(["compliance", str(MODELS / "paper_x_axis"), "--continuous", *flags,
+                     "--no-plots", "--json", "--out", str(tmp_path)]) == 0
+        assert json.loads(capsys.readouterr().out)["contact"] == flags[1]
+
+
+def test_axis_contact_names_its_own_parameters():
+    from servotune.analysis import axis_contact
+    from servotune.axis import load_axis
+
+    axis = load_axis(MODELS / "paper_x_axis")
+    with pytest.raises(ValueError, match=r"amplitude .* and frequency_hz"):
+        axis_contact(axis, "equivalent", amplitude=2e-6)
+    with pytest.raises(ValueError, match="non-zero sliding speed"):
+        axis_contact(axis, "sliding", speed=0.0)
+    with pytest.raises(ValueError, match="speed is a parameter of the 'sliding' contact"):
+        axis_contact(axis, "locked", speed=0.03)
+
+
+def _starter(tmp_path, old, new):
+    """The starter axis of servotune init with ``old`` replaced by ``new`` in axis.toml."""
+    from servotune.template import template_toml, write_template
+
+    write_template(tmp_path / "ax", name="ax")
+    text = template_toml("ax")
+    assert text.count(old) == 1, old
+    (tmp_path / "ax" / "axis.toml").write_text(text.replace(old, new))
+    return tmp_path / "ax"
+
+
+@pytest.mark.parametrize("key", ["current_period", "velocity_period", "position_period"])
+def test_a_zero_sample_period_is_refused_and_points_to_continuous(tmp_path, key):
+    from servotune.axis import AxisFormatError, load_axis
+
+    old = {"current_period": "current_period = 125.0e-6",
+           "velocity_period": "velocity_period = 125.0e-6",
+           "position_period": "position_period = 1.0e-3"}[key]
+    axis = _starter(tmp_path, old, f"{key} = 0.0")
+    with pytest.raises(AxisFormatError) as info:
+        load_axis(axis)
+    text = str(info.value)
+    assert f"[drive.sampling] {key}" in text and "must be > 0" in text
+    assert "continuous = true" in text
+
+
+def test_drive_motor_keys_name_the_section_and_offer_no_alias(tmp_path):
+    from servotune.axis import AxisFormatError, load_axis
+
+    axis = _starter(tmp_path, "torque_constant = 1.2", "torque_konstant = 1.2")
+    with pytest.raises(AxisFormatError) as info:
+        load_axis(axis)
+    text = str(info.value)
+    assert "[drive.motor]: unknown key 'torque_konstant'" in text and "[motor]" not in text
+    assert "'torque_peak'" in text and "torque_max" not in text
+
+
+def test_torque_max_stays_accepted_as_the_older_name_of_torque_peak(tmp_path):
+    from servotune.axis import load_axis
+
+    # with torque_continuous it is the peak torque of the thrust budget
+    axis = load_axis(_starter(tmp_path, "torque_peak = 36.0", "torque_max = 36.0"))
+    assert axis.drive.limits.torque_peak == 36.0

@@ -187,6 +187,35 @@ CASES = [
     ("axis-unknown-subtable", lambda t, s: ["modes", axis(t, s, lambda x: x
                                                           + "\n[friction.extra]\nx = 1\n")],
      1, "extra"),
+    ("axis-motor-key-names-section", lambda t, s: ["modes", axis(t, s, sub(
+        "torque_constant = 1.2", "torque_konstant = 1.2"))], 1,
+     "[drive.motor]: unknown key 'torque_konstant' (did you mean 'torque_constant'?)"),
+    ("axis-motor-key-missing", lambda t, s: ["modes", axis(t, s, sub(
+        "inductance = 3.0e-3", ""))], 1, "[drive.motor]: missing ['inductance']"),
+    ("axis-sampling-unknown-key", lambda t, s: ["modes", axis(t, s, sub(
+        "speed_filter = 0.0", "speed_filtre = 0.0"))], 1, "[drive.sampling]: unknown keys"),
+    ("axis-current-period-zero", lambda t, s: ["modes", axis(t, s, sub(
+        "current_period = 125.0e-6", "current_period = 0.0"))], 1,
+     "[drive.sampling] current_period: got 0.0, but a sample period must be > 0"),
+    ("axis-velocity-period-zero", lambda t, s: ["modes", axis(t, s, sub(
+        "velocity_period = 125.0e-6", "velocity_period = 0"))], 1,
+     "velocity_period: got 0, but a sample period must be > 0"),
+    ("axis-position-period-negative", lambda t, s: ["modes", axis(t, s, sub(
+        "position_period = 1.0e-3", "position_period = -1.0e-3"))], 1,
+     "or continuous = true"),
+    ("axis-position-period-in-ms", lambda t, s: ["modes", axis(t, s, sub(
+        "position_period = 1.0e-3", "position_period = 1.0"))], 1,
+     "position_period: 1.0 is outside the plausible range"),
+    ("axis-computation-delay-in-seconds", lambda t, s: ["modes", axis(t, s, sub(
+        "computation_delay = 1.0", "computation_delay = 125.0e-6"))], 1,
+     "computation_delay: got 0.000125; it counts sample periods, not seconds"),
+    ("axis-computation-delay-negative", lambda t, s: ["modes", axis(t, s, sub(
+        "computation_delay = 1.0", "computation_delay = -1.0"))], 1, "computation_delay"),
+    ("axis-speed-filter-huge", lambda t, s: ["modes", axis(t, s, sub(
+        "speed_filter = 0.0", "speed_filter = 2.0"))], 1,
+     "speed_filter: 2.0 is outside the plausible range [0, 0.05] s"),
+    ("axis-speed-filter-negative", lambda t, s: ["modes", axis(t, s, sub(
+        "speed_filter = 0.0", "speed_filter = -1.0e-3"))], 1, "speed_filter"),
     pytest.param("axis-kt-1e300", lambda t, s: ["lobes", axis(t, s, sub(
         "kt = 2.0e9", "kt = 1.0e300"))], 1, "kt"),
     pytest.param("axis-mass-1e300", lambda t, s: ["modes", _heavy(t, s)], 1, "mass",
@@ -281,6 +310,8 @@ CASES = [
      "--count"),
     ("modes-count-zero", lambda t, s: ["modes", str(PAPER), "--count", "0"], 2, "--count"),
     ("modes-pads-unknown", lambda t, s: ["modes", str(PAPER), "--pads", "glued"], 2, "--pads"),
+    ("modes-no-plots", lambda t, s: ["modes", str(PAPER), "--no-plots"], 2,
+     "--no-plots: servotune modes writes no figures"),
     ("twomass-alpha-negative", lambda t, s: ["twomass", "--alpha", "-1"], 2, "--alpha"),
     ("twomass-k-zero", lambda t, s: ["twomass", "--k", "0"], 2, "--k"),
     ("twomass-m1-nan", lambda t, s: ["twomass", "--m1", "nan"], 2, "--m1"),
@@ -311,7 +342,29 @@ CASES = [
     ("compliance-amplitude-huge", lambda t, s: ["compliance", str(PAPER), "--amplitude", "1"],
      2, "--amplitude"),
     ("compliance-equivalent-needs-amplitude", lambda t, s: [
-        "compliance", str(PAPER), "--contact", "equivalent"], 1, "amplitude"),
+        "compliance", str(PAPER), "--contact", "equivalent"], 1,
+     "--contact equivalent needs --amplitude and --frequency-hz"),
+    ("compliance-equivalent-needs-frequency", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "equivalent", "--amplitude", "2e-6"], 1,
+     "--contact equivalent needs --frequency-hz"),
+    ("compliance-sliding-needs-speed", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "sliding"], 1,
+     "--contact sliding needs a non-zero --speed"),
+    ("compliance-sliding-speed-zero", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "sliding", "--speed", "0"], 1,
+     "non-zero --speed"),
+    ("compliance-amplitude-without-equivalent", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "locked", "--amplitude", "2e-6"], 1,
+     "--amplitude sets the vibration of --contact equivalent"),
+    ("compliance-frequency-without-equivalent", lambda t, s: [
+        "compliance", str(PAPER), "--frequency-hz", "50"], 1,
+     "it has no meaning with --contact viscous"),
+    ("compliance-speed-without-sliding", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "equivalent", "--amplitude", "2e-6",
+        "--frequency-hz", "50", "--speed", "0.03"], 1,
+     "--speed sets the sliding speed of --contact sliding"),
+    ("compliance-speed-huge", lambda t, s: ["compliance", str(PAPER), "--contact", "sliding",
+                                            "--speed", "30"], 2, "[-10, 10] m/s"),
     ("compliance-c-without-viscous", lambda t, s: [
         "compliance", str(PAPER), "--contact", "locked", "--c", "1e5"], 1, "--c"),
     ("bode-contact-unknown", lambda t, s: ["bode", str(PAPER), "--contact", "glue"], 2,
@@ -321,14 +374,81 @@ CASES = [
     pytest.param("tune-starts-negative", lambda t, s: ["tune", str(PAPER), "--starts", "-5"], 2,
                  "--starts"),
     ("tune-free-unknown", lambda t, s: ["tune", str(PAPER), "--free", "xyz"], 2, "--free"),
+    ("study-missing-file", lambda t, s: ["study", str(t / "s.toml")], 1, "no study file"),
+    ("study-not-toml", lambda t, s: ["study", text_file(t, "s.toml", "[study\n")], 1,
+     "not valid TOML"),
+    ("study-unknown-key", lambda t, s: ["study", text_file(
+        t, "s.toml", f'[study]\naxes = ["{s}"]\nsampels = 3\n')], 1, "sampels"),
+    ("study-axis-missing", lambda t, s: ["study", text_file(
+        t, "s.toml", '[study]\naxes = ["nowhere"]\n')], 1, "no axis.toml"),
+    ("study-bad-distribution", lambda t, s: ["study", text_file(
+        t, "s.toml", f'[study]\naxes = ["{s}"]\n[vary."friction.lugre.fc"]\n'
+                     'distribution = "gauss"\n')], 1, "'gauss'"),
+    ("study-bad-scheduler", lambda t, s: ["study", str(t / "s.toml"), "--scheduler",
+                                          "localhost:8786"], 2, "tcp://"),
+    ("study-workers-zero", lambda t, s: ["study", str(t / "s.toml"), "--workers", "0"], 2,
+     "--workers"),
     ("verify-missing-file", lambda t, s: ["verify", str(t / "results.json")], 1,
      "results.json"),
     ("verify-not-json", lambda t, s: ["verify", text_file(t, "r.json", "{not json")], 1,
      "not valid JSON"),
     ("verify-no-design", lambda t, s: ["verify", text_file(t, "r.json", json.dumps(
         {"axis": str(PAPER)}))], 1, "'design'"),
-    ("verify-negative-c", lambda t, s: ["verify", text_file(t, "r.json", json.dumps(
-        {"axis": str(PAPER), "design": {"c": -1.0}}))], 1, "design.c"),
+    ("verify-negative-c", lambda t, s: ["verify", design_file(t, c=-1.0)], 1, "design.c"),
+    ("verify-misspelt-design-key", lambda t, s: ["verify", design_file(t, kv=None, kvv=25.0)],
+     1, "design has an unknown key 'kvv' (did you mean 'kv'?)"),
+    ("verify-design-without-kp-ti", lambda t, s: ["verify", design_file(t, kp=None, ti=None)],
+     1, "design has no 'kp', 'ti'; the design must hold c [N s/m], kv [1/s]"),
+    ("verify-design-only-c", lambda t, s: ["verify", design_file(t, kv=None, kp=None,
+                                                                 ti=None)], 1, "'kv'"),
+    ("verify-design-text", lambda t, s: ["verify", design_file(t, kv="25")], 1,
+     'design.kv is "25"; give a number in 1/s'),
+    ("verify-design-null", lambda t, s: ["verify", design_file(t, kp="null")], 1,
+     "design.kp is null"),
+    ("verify-design-nan", lambda t, s: ["verify", design_file(t, kp="NaN")], 1,
+     "design.kp is nan; give a finite number > 0"),
+    ("verify-design-infinite-c", lambda t, s: ["verify", design_file(t, c="Infinity")], 1,
+     "design.c is inf"),
+    ("verify-design-negative-ti", lambda t, s: ["verify", design_file(t, ti=-0.01)], 1,
+     "design.ti is -0.01"),
+    ("verify-design-zero-kv", lambda t, s: ["verify", design_file(t, kv=0)], 1,
+     "design.kv is 0"),
+    ("verify-design-boolean", lambda t, s: ["verify", design_file(t, kp=True)], 1,
+     "design.kp is true"),
+    ("verify-design-kv-unit-slip", lambda t, s: ["verify", design_file(t, kv=1.5e6)], 1,
+     "design.kv is 1500000.0, above the plausible 10000 1/s"),
+    ("verify-design-not-object", lambda t, s: ["verify", text_file(t, "r.json", json.dumps(
+        {"axis": str(PAPER), "design": [1, 2]}))], 1, "'design' must be an object"),
+    ("verify-axis-not-text", lambda t, s: ["verify", design_file(t, axis=5)], 1,
+     "'axis' must be the path of the axis folder"),
+    ("verify-axis-missing", lambda t, s: ["verify", design_file(t, axis="nowhere")], 1,
+     "the axis folder 'nowhere' does not exist"),
+    ("verify-a-folder", lambda t, s: ["verify", _folder(t, "ax")], 1,
+     "is a folder; verify wants the results.json that servotune tune writes"),
+    ("verify-an-axis-folder", lambda t, s: ["verify", str(PAPER)], 1,
+     "(an axis folder: run servotune tune"),
+    ("verify-a-results-folder", lambda t, s: ["verify", _results_folder(t)], 1,
+     "tune_ax/results.json"),
+    ("verify-force-negative", lambda t, s: ["verify", design_file(t), "--force-pp", "-1"], 2,
+     "argument --force-pp: '-1' is not accepted: give a number in (0, 1e+06] N"),
+    ("verify-force-huge", lambda t, s: ["verify", design_file(t), "--force-pp", "1e9"], 2,
+     "--force-pp"),
+    ("verify-force-text", lambda t, s: ["verify", design_file(t), "--force-pp", "much"], 2,
+     "'much' is not a number"),
+    ("verify-speed-zero", lambda t, s: ["verify", design_file(t), "--speed", "0"], 2,
+     "argument --speed: '0' is not accepted: give a number in (0, 10] m/s"),
+    ("verify-speed-huge", lambda t, s: ["verify", design_file(t), "--speed", "50"], 2,
+     "--speed"),
+    ("verify-f-start-nan", lambda t, s: ["verify", design_file(t), "--f-start-hz", "nan",
+                                         "--f-end-hz", "100"], 2, "--f-start-hz"),
+    ("verify-f-end-huge", lambda t, s: ["verify", design_file(t), "--f-start-hz", "10",
+                                        "--f-end-hz", "1e6"], 2,
+     "argument --f-end-hz: '1e6' is not accepted: give a number in (0, 100000] Hz"),
+    ("verify-f-start-alone", lambda t, s: ["verify", design_file(t), "--f-start-hz", "10"],
+     1, "give both --f-start-hz and --f-end-hz"),
+    ("verify-band-reversed", lambda t, s: ["verify", design_file(t), "--f-start-hz", "100",
+                                           "--f-end-hz", "10"], 1,
+     "--f-start-hz 100 must be below --f-end-hz 10"),
     ("unknown-command", lambda t, s: ["tuning", str(PAPER)], 2, "invalid choice"),
     ("no-command", lambda t, s: [], 2, "COMMAND"),
 
@@ -347,6 +467,30 @@ CASES = [
      "is a file"),
     ("init-existing-axis", lambda t, s: ["init", _copy(t, s)], 1, "--force"),
 ]
+
+
+def design_file(tmp, axis=str(PAPER), **change) -> str:
+    """A results file of servotune tune (axis and design) with design keys changed: None drops
+    a key, the strings "NaN", "Infinity" and "null" are written as those JSON words."""
+    design = {"c": 5578.0, "kv": 25.5, "kp": 5.85, "ti": 0.0267}
+    design.update(change)
+    design = {k: v for k, v in design.items() if v is not None}
+    text = json.dumps({"axis": axis, "design": design})
+    for word in ("NaN", "Infinity", "null"):
+        text = text.replace(f'"{word}"', word)
+    return text_file(tmp, "results.json", text)
+
+
+def _folder(tmp, name) -> str:
+    (tmp / name).mkdir()
+    return str(tmp / name)
+
+
+def _results_folder(tmp) -> str:
+    folder = tmp / "out" / "tune_ax"
+    folder.mkdir(parents=True)
+    design_file(folder)
+    return str(folder)
 
 
 def _heavy(tmp, starter) -> str:

@@ -145,7 +145,8 @@ def test_table3_text_and_bad_workers(small_axis_command, capsys):
 
 
 def test_verify_command_reads_the_design(tmp_path, capsys):
-    # a design file names the axis and the design; verify judges it on the axis' regimes
+    # a design file names the axis and the design; verify judges it on the axis' regimes,
+    # says where it wrote the results, and results.json holds what --json prints
     from servotune.template import write_template
 
     axis = tmp_path / "axis"
@@ -153,9 +154,13 @@ def test_verify_command_reads_the_design(tmp_path, capsys):
     res = tmp_path / "tuned.json"
     res.write_text(json.dumps({"axis": str(axis), "design": {
         "c": 5578.0, "kv": 45.0, "kp": 3.0, "ti": 0.0106}}))
-    assert main(["verify", str(res), "--json", "--force-pp", "300", "--speed", "0.08",
-                 "--f-start-hz", "60", "--f-end-hz", "200"]) in (0, 1)
-    out = json.loads(capsys.readouterr().out)
+    out_dir = tmp_path / "out"
+    assert main(["verify", str(res), "--force-pp", "300", "--speed", "0.08", "--no-plots",
+                 "--f-start-hz", "60", "--f-end-hz", "200", "--out", str(out_dir)]) in (0, 1)
+    text = capsys.readouterr().out
+    folder = out_dir / "verify_my_axis"
+    assert f"wrote {folder} (results.json)" in text
+    out = json.loads((folder / "results.json").read_text())
     assert out["design"]["c"] == 5578.0
     rows = [r for r in out["rows"] if r["kind"] == "sweep"]
     assert {(r["force_pp_n"], r["speed_m_per_s"]) for r in rows} == {(300.0, 0.0),

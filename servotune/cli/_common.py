@@ -73,11 +73,13 @@ __all__ = [
     "DEFAULT_OUT",
     "DEFAULT_DURATION",
     "add_common_options",
+    "refuse_no_plots",
     "add_output_options",
     "add_workers_option",
     "add_duration_option",
     "add_contact_options",
     "contact_from_args",
+    "check_contact_args",
     "default_workers",
     "show_progress",
     # output policy
@@ -238,6 +240,19 @@ def add_common_options(parser, *, out: bool = True, plots: bool = False,
                             help="write no figures (faster; matplotlib is not loaded)", **keep)
 
 
+def refuse_no_plots(parser, command: str, writes: str = "results.json") -> None:
+    """``--no-plots`` on a command that draws no figure: not listed, and refused as a usage
+    error (exit status 2) that says why, rather than argparse's bare "unrecognized
+    arguments"."""
+    class _Refuse(argparse.Action):
+        def __call__(self, parser, namespace, values, option_string=None):
+            parser.error(f"{option_string}: servotune {command} writes no figures (only "
+                         f"{writes}), so there are none to turn off; drop the flag")
+
+    parser.add_argument("--no-plots", nargs=0, action=_Refuse, default=False,
+                        help=argparse.SUPPRESS)
+
+
 def add_output_options(parser, default_out: str | None = DEFAULT_OUT) -> None:
     """The flags of earlier versions (``--json``, ``--out DIR``, ``--force``) for commands that
     have not moved to :func:`add_common_options` and :class:`RunOutput` yet; ``--quiet`` is
@@ -297,15 +312,17 @@ def add_contact_options(parser, default: str = "viscous") -> None:
                              "--frequency-hz), sliding (LuGre linearised at --speed), free "
                              f"(default {default})")
     parser.add_argument("--c", type=_DAMPING, default=None,
-                        help="viscous guide-way damping C [N s/m] (axis total) for --contact "
-                             "viscous")
+                        help="viscous guide-way damping C [N s/m] (axis total), "
+                             f"{_DAMPING.accepted}; only with --contact viscous")
     parser.add_argument("--amplitude", type=_AMPLITUDE, default=None,
-                        help="vibration amplitude [m] for --contact equivalent")
+                        help=f"vibration amplitude [m], {_AMPLITUDE.accepted}; needed by and "
+                             "only with --contact equivalent")
     parser.add_argument("--frequency-hz", type=_FREQUENCY, default=None,
-                        help="vibration frequency [Hz] for --contact equivalent (default: the "
-                             "locked-pad work-piece resonance is not guessed; give it)")
+                        help=f"vibration frequency [Hz], {_FREQUENCY.accepted}; needed by and "
+                             "only with --contact equivalent (not guessed: give it)")
     parser.add_argument("--speed", type=_SPEED, default=None,
-                        help="sliding speed [m/s] for --contact sliding")
+                        help=f"sliding speed [m/s], {_SPEED.accepted} and not 0; needed by and "
+                             "only with --contact sliding")
     parser.add_argument("--continuous", action="store_true",
                         help="the drive in continuous time, as the paper models it (no "
                              "sampling, no delays) instead of the digital drive of "
@@ -317,13 +334,45 @@ def axis_from_args(axis, args):
     return axis.with_continuous_drive() if getattr(args, "continuous", False) else axis
 
 
+def check_contact_args(args) -> None:
+    """Refuse a contact parameter given with a ``--contact`` that does not use it, and a
+    ``--contact`` given without the parameters it needs, naming the flags.
+
+    Raises
+    ------
+    CliError
+    """
+    kind = args.contact
+    for flag, value, user in (("--c", args.c, "viscous"),
+                              ("--amplitude", args.amplitude, "equivalent"),
+                              ("--frequency-hz", args.frequency_hz, "equivalent"),
+                              ("--speed", args.speed, "sliding")):
+        if value is not None and kind != user:
+            what = {"viscous": "the viscous damping of --contact viscous",
+                    "equivalent": "the vibration of --contact equivalent (the describing "
+                                  "function)",
+                    "sliding": "the sliding speed of --contact sliding"}[user]
+            raise CliError(f"{flag} sets {what}; it has no meaning with --contact {kind}: "
+                           f"drop it or use --contact {user}")
+    if kind == "equivalent":
+        missing = [flag for flag, value in (("--amplitude", args.amplitude),
+                                            ("--frequency-hz", args.frequency_hz))
+                   if value is None]
+        if missing:
+            raise CliError(f"--contact equivalent needs {' and '.join(missing)}: the vibration "
+                           "amplitude [m] and frequency [Hz] of the describing function, e.g. "
+                           "--amplitude 2e-6 --frequency-hz 50")
+    if kind == "sliding" and not args.speed:
+        raise CliError("--contact sliding needs a non-zero --speed: the sliding speed [m/s] "
+                       "of the linearisation, e.g. --speed 0.03")
+
+
 def contact_from_args(axis, args):
-    """The contact model the options ask for."""
+    """The contact model the options ask for (the options checked by
+    :func:`check_contact_args`)."""
     from ..analysis import axis_contact
 
-    if args.contact != "viscous" and args.c is not None:
-        raise CliError(f"--c sets the viscous damping of --contact viscous; it has no meaning "
-                       f"with --contact {args.contact}: drop it or use --contact viscous")
+    check_contact_args(args)
     return axis_contact(axis, args.contact, amplitude=args.amplitude,
                         frequency_hz=args.frequency_hz, speed=args.speed, c=args.c)
 

@@ -1,6 +1,15 @@
-"""``servotune bode``: the velocity and position loops of an axis with their margins."""
+"""``servotune bode``: the velocity and position loops of an axis with their margins.
+
+The axis' model checks run first (:func:`servotune.model_checks.axis_model_checks`): a
+structure whose rotor-to-encoder motion contradicts the drive's transmission (a flipped DOF
+direction, a ratio off by more than 2 %) is refused with an error naming the DOF and the fix
+(its margins would be those of a positive-feedback loop); kept modes that do not cover the
+requirements' band give a warning (standard error, the text output, ``warnings`` in the JSON).
+"""
 
 from __future__ import annotations
+
+import sys
 
 from ._common import (
     RunOutput,
@@ -36,9 +45,14 @@ def run(args) -> int:
     with progress.task(f"loading {args.axis}"):
         from .. import analysis
         from ..axis import load_axis
+        from ..model_checks import axis_model_checks
 
         axis = axis_from_args(load_axis(args.axis), args)
     require_section(axis, "drive", "[drive]", "servotune bode (it analyses the servo loops)")
+    with progress.task(f"{axis.name}: model checks"):
+        checks = axis_model_checks(axis).require()
+    for text in checks.warnings:
+        print(f"WARNING: {text}", file=sys.stderr)
     contact = contact_from_args(axis, args)
     names = [] if args.no_plots else ["bode.png"]
     run = RunOutput.for_args(args, "bode", axis.name, ["results.json", *names])
@@ -46,7 +60,8 @@ def run(args) -> int:
         result = analysis.loop_report(axis, contact)
     out = {"axis": axis.name, "kv": axis.drive.kv,
            "kv_m_per_min_per_mm": axis.drive.kv_m_per_min_per_mm, **result.to_dict(),
-           "folder": str(run.path), "figures": [str(run.file(n)) for n in names]}
+           "folder": str(run.path), "figures": [str(run.file(n)) for n in names],
+           "warnings": list(checks.warnings), "model_checks": checks.to_dict()}
     with progress.task(f"writing {run.path}"), run.writing() as folder:
         if names:
             save_figure(result.plot(f"{axis.name}: loops with {contact.note}"), folder / names[0])
@@ -64,5 +79,7 @@ def run(args) -> int:
         low = "-" if a["gain_margin_lower_db"] is None else f"{a['gain_margin_lower_db']:.1f}"
         print(f"  {name:10} {a['phase_margin_deg']:9.1f} {gm:>8} {low:>14} {a['ms']:6.2f} "
               f"{a['crossover_hz']:15.2f} {a['bandwidth_hz']:15.2f}")
+    for line in checks.warnings:
+        print(f"  WARNING: {line}")
     print(f"  wrote {run.path}")
     return 0

@@ -72,9 +72,8 @@ def _band(args, axis=None):
 
 
 def _check_axis(args, coords, progress):
-    from ..axis import load_axis
+    from ..axis import load_axis, structure_matrices
     from ..model_checks import transmission_check
-    from ..structure import io
     from ..structure.cbcheck import cb_check
     from ..structure.coverage import mode_coverage
     from ..structure.reduction_check import reduction_check
@@ -91,9 +90,7 @@ def _check_axis(args, coords, progress):
     table = axis.tables.get("structure", {})
     if "reduce" in table:  # FE matrices reduced on loading: check against them
         with progress.task("checking the reduction against the full model"):
-            data = io.read_structure(axis.path / table["mass"], axis.path / table["stiffness"],
-                                     axis.path / table["dof_map"] if "dof_map" in table
-                                     else None)
+            data = structure_matrices(axis)  # as read, ports named
             boundary = list(table["reduce"]["boundary"])
             zeta = model.damping_ratio
             zeta = (float(zeta[0]) if zeta is not None and len(set(zeta.tolist())) == 1

@@ -7,6 +7,7 @@ from ._common import (
     add_common_options,
     add_contact_options,
     axis_from_args,
+    check_contact_args,
     contact_from_args,
     default_notes,
     print_json,
@@ -38,6 +39,7 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     from .. import progress
 
+    check_contact_args(args)  # flags that do not fit --contact: refused before any work
     with progress.task(f"loading {args.axis}"):
         from .. import analysis
         from ..axis import load_axis

@@ -4,11 +4,18 @@ Exit status: 0 when the design is verified (the linear checks hold in every regi
 the nonlinear axis holds the claim in every regime), 1 when it is not (or the input is bad), 3
 when the linear checks hold but the nonlinear verification was skipped (``--no-simulation``),
 2 for a bad flag, 130 when interrupted.
+
+Before any tuning the axis' model checks run (:func:`servotune.model_checks.axis_model_checks`):
+a structure whose rotor-to-encoder motion contradicts the drive's transmission (a flipped DOF
+direction, a ratio off by more than 2 %) is refused with an error that names the DOF and the
+fix (tuning it would give wrong advice); kept modes that do not cover the requirements' band
+give a warning (standard error, the text output and ``warnings`` in the JSON).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ._common import (
     STARTS,
@@ -89,10 +96,15 @@ def run(args) -> int:
         from .. import report, summary
         from ..axis import load_axis
         from ..design import tune_axis
+        from ..model_checks import axis_model_checks
 
         axis = load_axis(args.axis)
     require_section(axis, "friction", "[friction]",
                     "servotune tune (the guide-way pads are where C acts)")
+    with progress.task(f"{axis.name}: model checks"):
+        checks = axis_model_checks(axis).require()
+    for text in checks.warnings:
+        print(f"WARNING: {text}", file=sys.stderr)
     notes = []
     if axis.drive is None:
         notes.append("no [drive]: the structure with viscous guide-way pads alone is tuned "
@@ -114,7 +126,10 @@ def run(args) -> int:
                             progress=report_sims)
     interrupt.check("the tuning")
     results = job.to_dict()
+    notes += list(job.result.notes)
     results["notes"] = notes + results["notes"]
+    results["warnings"] = list(checks.warnings)
+    results["model_checks"] = checks.to_dict()
     status = exit_status(job)
     results["exit_status"] = status
     results["folder"] = str(out.path)
@@ -137,6 +152,8 @@ def run(args) -> int:
           f"{r.stats['time_s']:.1f} s)")
     for line in notes:
         print(f"  note: {line}")
+    for line in checks.warnings:
+        print(f"  WARNING: {line}")
     for table in (summary.inputs_table(job), summary.design_table(job),
                   summary.regimes_table(job), summary.thrust_table(job),
                   summary.realisation_table(job), summary.loops_table(job)):

@@ -1,7 +1,8 @@
 """``servotune verify RESULT.json``: does the nonlinear axis do what the design claims?
 
-RESULT.json holds at least ``{"axis": "path/to/axis", "design": {"c": ..., "kv": ..., "kp": ...,
-"ti": ...}}`` (SI; the file ``servotune tune`` writes; a relative axis path is taken from the
+RESULT.json is the ``results.json`` that ``servotune tune`` writes (``out/tune_<axis>/``); it
+must hold ``{"axis": "path/to/axis", "design": {"c": ..., "kv": ..., "kp": ..., "ti": ...}}``
+(SI: C [N s/m], Kv [1/s], Kp [N m s/rad], Ti [s]; a relative axis path is taken from the
 file's folder, then from the current folder). The design is checked on the axis' linear regime
 models (dense grids, python-control) and simulated with LuGre friction at the pads (sigma2 =
 C): sine sweeps standing still and while feeding, at the process force and a smaller and a
@@ -12,93 +13,180 @@ otherwise (see :mod:`servotune.verdict`). Exit status 0 when verified, 1 when no
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from pathlib import Path
 
 from ._common import (
+    CliError,
     RunOutput,
     add_common_options,
     add_workers_option,
     default_workers,
+    number,
     print_json,
     save_figure,
     write_results,
 )
 
-__all__ = ["add_parser", "run", "read_result"]
+__all__ = ["add_parser", "run", "read_result", "DESIGN_KEYS"]
+
+#: The design keys of a results file: unit and the largest plausible value (SI), the upper
+#: limits of the bounds of axis.toml's [tuning] (a unit slip beyond them is refused).
+DESIGN_KEYS = {"c": ("N s/m", 1e12), "kv": ("1/s", 1e4), "kp": ("N m s/rad", 1e7),
+               "ti": ("s", 1e3)}
+_WANTED = ("the design must hold c [N s/m], kv [1/s], kp [N m s/rad] and ti [s] as numbers, "
+           "as servotune tune writes them")
+_WHERE = "e.g. out/tune_<axis>/results.json"
+
+# flag ranges: a sweep force up to 1 MN, a feed speed up to 10 m/s (beyond any rapid traverse
+# of a machine tool), sweep frequencies up to 100 kHz
+FORCE_PP = number(0.0, 1e6, low_open=True, example=300, unit="N")
+SPEED = number(0.0, 10.0, low_open=True, example=0.05, unit="m/s")
+FREQUENCY = number(0.0, 1e5, low_open=True, example=50, unit="Hz")
 
 
 def read_result(path) -> tuple[Path, dict]:
-    """The axis folder and the design of a tuning results file."""
+    """The axis folder and the design of a tuning results file.
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        A missing file, a folder, a file that is not JSON, or one without the axis and the
+        whole design (c, kv, kp, ti) as positive numbers; the message names what is wrong.
+    """
     path = Path(path)
+    if path.is_dir():
+        inside = path / "results.json"
+        hint = (f": give {inside}" if inside.is_file() else
+                f" (an axis folder: run servotune tune {path} first)"
+                if (path / "axis.toml").is_file() else f" ({_WHERE})")
+        raise CliError(f"{path} is a folder; verify wants the results.json that servotune tune "
+                       f"writes{hint}")
     if not path.is_file():
-        raise FileNotFoundError(f"{path} does not exist; give the JSON written by the tuning")
+        raise FileNotFoundError(f"{path} does not exist; give the results.json that servotune "
+                                f"tune writes ({_WHERE})")
     try:
         data = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path} is not valid JSON: {exc}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path} is not valid JSON: {exc}; give the results.json that "
+                         f"servotune tune writes") from None
     if not isinstance(data, dict) or "axis" not in data or "design" not in data:
         raise ValueError(f"{path} needs the keys 'axis' (axis folder) and 'design' "
-                         "({'c', 'kv', 'kp', 'ti'})")
+                         "({'c', 'kv', 'kp', 'ti'}), as servotune tune writes them "
+                         f"({_WHERE})")
     design = data["design"]
-    if not isinstance(design, dict) or "c" not in design:
-        raise ValueError(f"{path}: 'design' must be an object with at least 'c' [N s/m]")
+    if not isinstance(design, dict):
+        raise ValueError(f"{path}: 'design' must be an object {{'c', 'kv', 'kp', 'ti'}}, got "
+                         f"{design!r}; {_WANTED}")
+    values = _design_values(path, design)
+    return _axis_folder(path, data["axis"]), values
+
+
+def _design_values(path: Path, design: dict) -> dict:
+    """The four design values, each checked, with a message naming the key."""
+    # tune writes a value that is not finite as null with '<key>_reason' beside it
+    reasons = {f"{k}_reason" for k in DESIGN_KEYS}
+    unknown = [k for k in design if k not in DESIGN_KEYS and k not in reasons]
+    if unknown:
+        key = unknown[0]
+        close = difflib.get_close_matches(str(key), list(DESIGN_KEYS), n=1)
+        guess = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ValueError(f"{path}: design has an unknown key {key!r}{guess}; {_WANTED}")
+    missing = [k for k in DESIGN_KEYS if k not in design]
+    if missing:
+        raise ValueError(f"{path}: design has no {', '.join(repr(k) for k in missing)}; "
+                         f"{_WANTED}")
     values = {}
-    for key in ("c", "kv", "kp", "ti"):
-        value = design.get(key)
-        if value is not None:
-            if not isinstance(value, (int, float)) or isinstance(value, bool) or not (
-                    value > 0 and (math.isfinite(value) or key == "ti")):
-                raise ValueError(f"{path}: design.{key} must be a positive number, got {value!r}")
-            value = float(value)
-        values[key] = value
-    axis = Path(data["axis"])
-    if not axis.is_absolute() and (path.parent / axis).exists():
-        axis = path.parent / axis
-    return axis, values
+    for key, (unit, high) in DESIGN_KEYS.items():
+        value = design[key]
+        where = f"{path}: design.{key}"
+        if (key == "ti" and value is None
+                and str(design.get("ti_reason", "")).startswith("+infinity")):
+            value = math.inf  # no integral action, as tune writes it
+        if value is None or isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{where} is {json.dumps(value)}; give a number in {unit} "
+                             f"({_WANTED})")
+        if key == "ti" and value == math.inf:
+            values[key] = value
+            continue
+        if not math.isfinite(value) or value <= 0:
+            raise ValueError(f"{where} is {value!r}; give a finite number > 0 in {unit}")
+        if value > high:
+            raise ValueError(f"{where} is {value!r}, above the plausible {high:g} {unit}; "
+                             "check the value and its unit (SI)")
+        values[key] = float(value)
+    return values
 
 
-def _positive(name):
-    def parse(text):
-        try:
-            value = float(text)
-        except ValueError:
-            raise ValueError(f"{name} takes a positive number, got {text!r}") from None
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} takes a positive number, got {text!r}")
-        return value
-    return parse
+def _axis_folder(path: Path, axis) -> Path:
+    """The axis folder a results file names: relative to the file's folder, else to the
+    current folder."""
+    if not isinstance(axis, str) or not axis.strip():
+        raise ValueError(f"{path}: 'axis' must be the path of the axis folder (a string), got "
+                         f"{json.dumps(axis)}")
+    axis = Path(axis)
+    if axis.is_absolute():
+        candidates = [axis]
+    else:
+        candidates = [path.parent / axis, axis]
+    for candidate in candidates:
+        if candidate.exists():
+            return candidate
+    looked = " or ".join(str(c) for c in dict.fromkeys(candidates))
+    raise FileNotFoundError(f"{path}: the axis folder {str(axis)!r} does not exist (looked for "
+                            f"{looked}); give the axis folder servotune tune was run on")
 
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "verify", help="does the nonlinear axis (LuGre) do what a tuned design claims?",
-        description="Check a tuned design (RESULT.json of servotune tune: 'axis' and 'design' "
-                    "{c, kv, kp, ti}) on the axis' linear regime models and simulate it with "
-                    "LuGre friction at the pads (sigma2 = C): sine sweeps standing still and "
-                    "while feeding, at the process force and a smaller and a larger one, over "
-                    "the band of the axis; the verdict per regime. Exit status 0 verified, "
-                    "1 not verified.")
-    p.add_argument("result", help="tuning results file (JSON)")
-    p.add_argument("--force-pp", type=_positive("--force-pp"), action="append", default=None,
-                   metavar="N", help="sweep force peak to peak [N], repeatable (default: the "
-                                     "process force and a smaller and a larger one)")
-    p.add_argument("--speed", type=_positive("--speed"), action="append", default=None,
-                   metavar="V", help="feed speed [m/s] of a feeding regime, repeatable "
-                                     "(default: the axis' feed speeds)")
-    p.add_argument("--f-start-hz", type=_positive("--f-start-hz"), default=None,
-                   help="sweep start [Hz] (default: from the axis' band and modes)")
-    p.add_argument("--f-end-hz", type=_positive("--f-end-hz"), default=None,
-                   help="sweep end [Hz] (default: from the axis' band and modes)")
+        description="Check a tuned design (the results.json of servotune tune, e.g. "
+                    "out/tune_<axis>/results.json: 'axis' and 'design' {c, kv, kp, ti}) on the "
+                    "axis' linear regime models and simulate it with LuGre friction at the pads "
+                    "(sigma2 = C): sine sweeps standing still and while feeding, at the process "
+                    "force and a smaller and a larger one, over the band of the axis; the "
+                    "verdict per regime. Exit status 0 verified, 1 not verified.")
+    p.add_argument("result", help="the results.json of servotune tune "
+                                  "(e.g. out/tune_<axis>/results.json)")
+    p.add_argument("--force-pp", type=FORCE_PP, action="append", default=None,
+                   metavar="N", help=f"sweep force peak to peak [N], {FORCE_PP.accepted}, "
+                                     "repeatable (default: the process force and a smaller "
+                                     "and a larger one)")
+    p.add_argument("--speed", type=SPEED, action="append", default=None,
+                   metavar="V", help=f"feed speed [m/s] of a feeding regime, "
+                                     f"{SPEED.accepted}, repeatable (default: the axis' feed "
+                                     "speeds)")
+    p.add_argument("--f-start-hz", type=FREQUENCY, default=None, metavar="F",
+                   help=f"sweep start [Hz], {FREQUENCY.accepted}, below --f-end-hz (default: "
+                        "from the axis' band and modes)")
+    p.add_argument("--f-end-hz", type=FREQUENCY, default=None, metavar="F",
+                   help=f"sweep end [Hz], {FREQUENCY.accepted} (default: from the axis' band "
+                        "and modes)")
     add_workers_option(p)
     add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
 
+def _band(args):
+    """The sweep band of the flags (None: the axis'), checked before any work."""
+    if (args.f_start_hz is None) != (args.f_end_hz is None):
+        raise CliError("give both --f-start-hz and --f-end-hz, or neither (then the band "
+                       "comes from the axis)")
+    if args.f_start_hz is None:
+        return None
+    if not args.f_start_hz < args.f_end_hz:
+        raise CliError(f"--f-start-hz {args.f_start_hz:g} must be below --f-end-hz "
+                       f"{args.f_end_hz:g}")
+    return (args.f_start_hz, args.f_end_hz)
+
+
 def run(args) -> int:
     from .. import interrupt, progress
 
+    band = _band(args)
+    axis_path, values = read_result(args.result)
     with progress.task(f"loading {args.result}"):
         from .. import plots
         from ..axis import load_axis
@@ -106,15 +194,7 @@ def run(args) -> int:
         from ..tuning import Design
         from ..verdict import nonlinear_verdict
 
-    axis_path, values = read_result(args.result)
-    band = None
-    if (args.f_start_hz is None) != (args.f_end_hz is None):
-        raise ValueError("give both --f-start-hz and --f-end-hz, or neither")
-    if args.f_start_hz is not None:
-        if not args.f_start_hz < args.f_end_hz:
-            raise ValueError("--f-start-hz must be below --f-end-hz")
-        band = (args.f_start_hz, args.f_end_hz)
-    axis = load_axis(axis_path)
+        axis = load_axis(axis_path)
     if axis.drive is None or axis.friction is None:
         raise ValueError(f"{axis.file}: the nonlinear verification needs [drive] and [friction]")
     design = Design(**values)
@@ -161,6 +241,7 @@ def run(args) -> int:
                       + ("stick-slip" if s.stick_slip else "slides steadily"))
     print(("VERIFIED" if verdict.verified else "NOT VERIFIED") + (
         "" if verdict.verified else ": " + "; ".join(verdict.reasons)))
+    print(f"  wrote {output.path} ({', '.join(names)})")
     return status
 
 

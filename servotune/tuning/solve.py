@@ -14,6 +14,13 @@
 4. :func:`servotune.tuning.verify.verify` and :func:`requirement_checks`: the independent
    check of the design in every model.
 
+When no start reaches a usable optimum, the dense check of the initial design tells the two
+failures apart: if the initial design meets every requirement, the requirements are feasible
+and the optimiser merely found no better design, so the initial design is returned with that
+reason in ``notes``; otherwise the requirements are infeasible within the bounds
+(:class:`RequirementsNotMetError`, naming the binding constraint) or, when only the objective
+did not settle, :class:`TuningDidNotConvergeError`.
+
 The optimisation problem itself is stated in :mod:`servotune.tuning.nlp`.
 """
 
@@ -64,7 +71,9 @@ class TuningResult:
     predicted : dict
         The optimiser's own values (port model) at the optimum.
     success : bool
-        True only if the solver converged AND every requirement check holds.
+        True only if every requirement check holds on the design AND the solver converged
+        (or, when no start reached a usable optimum, the initial design, which meets every
+        requirement, is kept: said in ``notes``).
     reasons : tuple of str
         Why not, when ``success`` is False.
     active : tuple of str
@@ -90,6 +99,9 @@ class TuningResult:
     checks: tuple[RequirementCheck, ...] = ()
     excluded: tuple = ()
     start: Design | None = None
+    notes: tuple[str, ...] = ()
+    """Remarks on how the design was reached (e.g. the initial design kept because the
+    optimiser found no better one)."""
 
 
 # ----------------------------------------------------------------------- 1. starting points
@@ -370,16 +382,20 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     Returns
     -------
     TuningResult
-        ``success`` only when IPOPT converged and every requirement check holds.
+        ``success`` only when every requirement check holds and IPOPT converged. When no
+        start reaches a usable optimum but the initial design meets every requirement, the
+        initial design, with the reason in ``notes`` ("the optimiser found no better design").
 
     Raises
     ------
     NoStableStartError
         When no candidate keeps the models stable.
     RequirementsNotMetError
-        When no start reaches a feasible design; the message names the binding constraint.
+        "requirements infeasible": no start reaches a feasible design and the initial design
+        does not meet the requirements either; the message names the binding constraint.
     TuningDidNotConvergeError
-        When the requirements were met but the optimiser did not settle.
+        "the optimiser found no better design": the frequency constraints were met but the
+        objective did not settle, and the initial design does not meet every requirement.
     """
     t_start = time.perf_counter()
     req = problem.requirements
@@ -434,7 +450,25 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         if best is None or sol.objective < best.objective:
             best = sol
     if best is None:
-        _raise_infeasible(problem, full, runs, len(start_set.designs))
+        why = _no_optimum(full, runs, len(start_set.designs))
+        checks0 = requirement_checks(problem, x0, before, current_bw)
+        if not (before.stable and all(c.holds for c in checks0)):
+            _raise_infeasible(why, checks0)
+        return TuningResult(
+            problem=problem, initial=x0, design=x0, before=before, after=before, predicted={},
+            success=True, reasons=(), active=(), checks=checks0, excluded=excluded,
+            start=reference,
+            notes=(f"the optimiser found no better design than the initial one ({why}); the "
+                   "initial design is kept: it meets every requirement in the dense check. "
+                   "More starts (--starts) or other bounds may find a better one",),
+            stats={"starts": len(start_set.designs), "polished": 0,
+                   "iterations": int(iterations), "exchange_rounds": 0,
+                   "grid_points": int(grids.band.size + grids.loop.size),
+                   "models": len(problem.regimes),
+                   "return_status": runs[-1].stats["return_status"] if runs else None,
+                   "current_loop_bandwidth_hz": None if current_bw is None
+                   else current_bw * HZ,
+                   "time_s": time.perf_counter() - t_start})
     solver = full
 
     # 4. grid exchange (and the position-loop bandwidth ratio of the gates)
@@ -520,27 +554,64 @@ def _same_optimum(a: Solution, b: Solution, free) -> bool:
         abs(math.log(getattr(a.design, v) / getattr(b.design, v))) <= 1e-3 for v in free))
 
 
-def _raise_infeasible(problem, solver: Solver, runs, n_starts):
+@dataclass(frozen=True)
+class _NoOptimum:
+    """Why no start reached a usable optimum: ``kind`` "unstable" (the optima that meet the
+    frequency constraints all have an unstable loop), "objective" (the constraints were met,
+    only the objective's bound did not settle) or "constraint" (``constraint`` was violated
+    by ``violation`` in scaled units at the best start)."""
+
+    kind: str
+    n_starts: int
+    status: str
+    constraint: str = ""
+    violation: float = 0.0
+
+    def __str__(self) -> str:
+        if self.kind == "unstable":
+            return (f"the optima of all {self.n_starts} starts that meet the frequency "
+                    "constraints have an unstable loop")
+        if self.kind == "objective":
+            return (f"IPOPT did not converge from any of {self.n_starts} starts ({self.status}); "
+                    "the frequency constraints were met, only the objective did not settle")
+        return (f"'{self.constraint}' violated by {self.violation:.3g} in scaled units at the "
+                f"best of {self.n_starts} starts; IPOPT: {self.status}")
+
+
+def _no_optimum(solver: Solver, runs, n_starts) -> _NoOptimum:
+    """Why none of the runs gave a usable optimum."""
     feasible = [r for r in runs if r.converged]
     if feasible:
-        raise RequirementsNotMetError(
-            "the requirements cannot be met within the bounds: the binding constraint is "
-            f"closed-loop stability (the optima of all {len(feasible)} starts that meet the "
-            "frequency constraints have an unstable loop); relax the Ms limits, narrow the "
-            "bounds towards the initial design or add starts")
-    worst_run = min(runs, key=lambda r: max(solver.violations(r.g).values()))
+        return _NoOptimum("unstable", len(feasible), feasible[0].stats["return_status"])
+    worst_run = min(runs, key=lambda r: max(solver.violations(r.g).values(), default=0.0))
     viol = solver.violations(worst_run.g)
-    worst = max(viol, key=viol.get)
-    if worst in ("compliance peak", "chatter", "worst peak"):
+    worst = max(viol, key=viol.get) if viol else "compliance peak"
+    status = worst_run.stats["return_status"]
+    if worst in ("compliance peak", "chatter", "worst peak") or viol[worst] <= 1e-6:
+        return _NoOptimum("objective", n_starts, status)
+    return _NoOptimum("constraint", n_starts, status, worst, viol[worst])
+
+
+def _raise_infeasible(why: _NoOptimum, initial_checks):
+    """The error when no start gave a usable optimum and the initial design does not meet the
+    requirements either."""
+    failed = [c.text for c in initial_checks if not c.holds]
+    initial = ("the initial design does not meet the requirements: " + "; ".join(failed[:3])
+               + (" ..." if len(failed) > 3 else "")) if failed else \
+        "the initial design leaves a regime model unstable"
+    if why.kind == "objective":
         raise TuningDidNotConvergeError(
-            f"the optimiser did not converge from any of {n_starts} starts (IPOPT: "
-            f"{worst_run.stats['return_status']}); the requirements were met, only the "
-            "objective's bound was not settled: add starts (--starts) or narrow the bounds")
+            f"the optimiser found no better design: {why}, and {initial}; add starts "
+            "(--starts) or narrow the bounds")
+    if why.kind == "unstable":
+        raise RequirementsNotMetError(
+            "requirements infeasible within the bounds: the binding constraint is closed-loop "
+            f"stability ({why}), and {initial}; relax the Ms limits, narrow the bounds towards "
+            "the initial design or add starts")
     raise RequirementsNotMetError(
-        f"the requirements cannot be met within the bounds: the binding constraint is "
-        f"'{worst}' (violated by {viol[worst]:.3g} in scaled units at the best of {n_starts} "
-        f"starts; IPOPT: {worst_run.stats['return_status']}); relax it or widen the bounds of "
-        "the free variables")
+        f"requirements infeasible within the bounds: the binding constraint is "
+        f"'{why.constraint}' ({why}), and {initial}; relax it or widen the bounds of the "
+        "free variables")
 
 
 def _active(problem: TuningProblem, design: Design, solver: Solver, best: Solution) -> list:
