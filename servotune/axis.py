@@ -118,13 +118,16 @@ class TuningSettings:
     ``bounds`` maps ``c`` [N s/m], ``kv`` [1/s], ``kp`` [N m s/rad] and ``ti`` [s] to
     (low, high); absent ones take :data:`servotune.design.DEFAULT_BOUNDS`.
     ``friction_spread`` maps fc, fs, sigma1 (fractions) and sigma0 (a factor) to the spread of
-    the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`).
+    the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`);
+    ``friction_samples`` are further samples ``(label, {parameter: value})``, e.g. a study's
+    worst (:func:`servotune.study.spread_from_study`, ``servotune tune --spread-from``).
     """
 
     free: tuple[str, ...] = ("c", "kv", "kp", "ti")
     bounds: Mapping = field(default_factory=lambda: MappingProxyType({}))
     chatter_weight: float = 0.0
     friction_spread: Mapping = field(default_factory=lambda: MappingProxyType({}))
+    friction_samples: tuple = ()
 
 
 @dataclass(frozen=True, eq=False)

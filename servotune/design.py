@@ -85,7 +85,8 @@ def axis_regimes(axis: Axis, c: float | None = None, drive=None) -> tuple[Regime
         force = op.process_force_pp or 600.0
         amplitude, frequency = process_amplitude(axis, None, c, force)
     models = regime_models(axis.friction.lugre, op, amplitude, frequency,
-                           dict(axis.tuning.friction_spread))
+                           dict(axis.tuning.friction_spread),
+                           extra_samples=axis.tuning.friction_samples)
     if not op.feed_speeds:
         speed = op.rapid_speed or 0.1
         models += (RegimeModel(f"traverse {speed * 1e3:.3g} mm/s", "sliding", axis.friction.lugre,

@@ -249,16 +249,20 @@ class RegimeModel:
         return out
 
 
-def friction_samples(params: LuGreParameters, spread: dict | None) -> list[tuple[str,
-                                                                                 LuGreParameters]]:
-    """The nominal friction and the corners of a spread.
+def friction_samples(params: LuGreParameters, spread: dict | None,
+                     extra=()) -> list[tuple[str, LuGreParameters]]:
+    """The nominal friction, the corners of a spread and further given samples.
 
     ``spread`` maps parameter names to a relative spread: ``fc``, ``fs``, ``sigma1``: +-
     fraction (0.3 = 30 %); ``sigma0``: a factor (3.0 = x/÷ 3). Each parameter gives a low and
     a high sample, the others nominal (one-at-a-time corners: the extremes of a monotone
-    response; the corners of all combinations would grow as 2^n).
+    response; the corners of all combinations would grow as 2^n). ``extra`` are
+    ``(label, {parameter: value})`` samples, e.g. a study's worst ones
+    (:func:`servotune.study.spread_from_study`): the named parameters replace the nominal ones.
     """
     out = [("nominal", params)]
+    for label, values in extra:
+        out.append((str(label), dataclasses.replace(params, **dict(values))))
     for name, value in (spread or {}).items():
         if name not in ("fc", "fs", "sigma0", "sigma1"):
             raise ValueError(f"friction spread of {name!r}: choose among fc, fs, sigma0, sigma1")
@@ -286,8 +290,8 @@ def friction_samples(params: LuGreParameters, spread: dict | None) -> list[tuple
 
 def regime_models(friction: LuGreParameters | None, operation: Operation | None,
                   amplitude: float | None = None, frequency: float | None = None,
-                  spread: dict | None = None, viscous_only: bool = False
-                  ) -> tuple[RegimeModel, ...]:
+                  spread: dict | None = None, viscous_only: bool = False,
+                  extra_samples=()) -> tuple[RegimeModel, ...]:
     """The linear models of an axis' regimes.
 
     Parameters
@@ -300,11 +304,13 @@ def regime_models(friction: LuGreParameters | None, operation: Operation | None,
         given, the standing regime gets the describing-function model there.
     spread : dict, optional
         Friction spread (see :func:`friction_samples`): further models of every regime.
+    extra_samples : sequence of (str, dict), optional
+        Further friction samples (see :func:`friction_samples`).
     """
     if viscous_only or friction is None or operation is None:
         return (RegimeModel("viscous", "viscous"),)
     models = []
-    for label, params in friction_samples(friction, spread):
+    for label, params in friction_samples(friction, spread, extra_samples):
         if operation.standing:
             models.append(RegimeModel("standing", "presliding", params, sample=label))
             if amplitude is not None and frequency is not None:

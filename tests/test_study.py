@@ -243,3 +243,74 @@ def test_a_design_is_judged_on_every_sample_of_a_spread_it_was_not_tuned_for(tmp
         assert r["nonlinear_peak_m_per_n"] > 0 and math.isfinite(r["nonlinear_peak_m_per_n"])
         assert r["in.friction.lugre.sigma0"] == pytest.approx(
             axis.friction.lugre.sigma0 * r["factor.friction.lugre.sigma0"], rel=1e-12)
+
+
+# ------------------------------------------------------ a study's samples as a friction spread
+def _table(path, rows):
+    import pyarrow as pa
+
+    names = list(dict.fromkeys(k for r in rows for k in r))
+    pq.write_table(pa.table({k: [r.get(k) for r in rows] for k in names}), path)
+
+
+def test_the_worst_samples_of_a_study_become_friction_samples_of_every_regime(tmp_path):
+    from servotune.regimes import Operation, regime_models
+    from servotune.study.spread import spread_from_study
+
+    rows = [{"sample_id": i, "status": "done", "in.friction.lugre.fc": 2000.0 + i,
+             "factor.friction.lugre.fc": 1.0, "in.drive.velocity_loop.kp": 3.0,
+             "peak_compliance_m_per_n": 1e-8 * (1 + i % 3),
+             "nonlinear_peak_m_per_n": [2e-8, 5e-8, 1e-8, 4e-8][i]} for i in range(4)]
+    rows.append({"sample_id": 4, "status": "failed", "in.friction.lugre.fc": 9999.0,
+                 "error": "RequirementsNotMetError"})
+    _table(tmp_path / "results.parquet", rows)
+    samples = spread_from_study(tmp_path, count=2)
+    # the realised (nonlinear) peak ranks them: samples 1 and 3; only LuGre columns are taken
+    assert samples == (("study sample 1", {"fc": 2001.0}), ("study sample 3", {"fc": 2003.0}))
+    nominal = LuGreParameters.named("bianchi2014")
+    models = regime_models(nominal, Operation(feed_speeds=(0.02,), standing=True), None, None,
+                           None, extra_samples=samples)
+    by_sample = {}
+    for m in models:
+        by_sample.setdefault(m.sample, []).append(m)
+    assert set(by_sample) == {"nominal", "study sample 1", "study sample 3"}
+    assert all(len(v) == 2 for v in by_sample.values())  # standing + feeding each
+    assert by_sample["study sample 3"][0].friction.fc == 2003.0
+    assert by_sample["study sample 3"][0].friction.fs == nominal.fs
+    with pytest.raises(ValueError, match="varied no LuGre parameter"):
+        _table(tmp_path / "other.parquet", [{"sample_id": 0, "status": "done",
+                                             "in.drive.velocity_loop.kp": 3.0,
+                                             "peak_compliance_m_per_n": 1e-8}])
+        spread_from_study(tmp_path / "other.parquet")
+    with pytest.raises(ValueError, match="not a Parquet table"):
+        (tmp_path / "bad.parquet").write_text("no")
+        spread_from_study(tmp_path / "bad.parquet")
+
+
+def test_tune_takes_a_studys_worst_samples_as_further_friction_models(tmp_path, capsys):
+    # the worst sample of a (here written) study table joins every regime: the tuning
+    # reports its models by name, the sliding one at the sample's friction level
+    # g(v) = Fc + (Fs - Fc) exp(-(v/vs)^delta) with the study's Fc and Fs
+    write_template(tmp_path / "ax")
+    axis = load_axis(tmp_path / "ax")
+    lugre = axis.friction.lugre
+    fc, fs = 1.25 * lugre.fc, 0.8 * lugre.fs
+    _table(tmp_path / "results.parquet", [
+        {"sample_id": 7, "status": "done", "in.friction.lugre.fc": fc,
+         "in.friction.lugre.fs": fs, "peak_compliance_m_per_n": 2e-7},
+        {"sample_id": 8, "status": "done", "in.friction.lugre.fc": lugre.fc,
+         "in.friction.lugre.fs": lugre.fs, "peak_compliance_m_per_n": 1e-7}])
+    code = main(["tune", str(tmp_path / "ax"), "--spread-from", str(tmp_path / "results.parquet"),
+                 "--spread-samples", "1", "--no-simulation", "--starts", "1", "--json",
+                 "--no-plots", "--out", str(tmp_path / "out")])
+    out = json.loads(capsys.readouterr().out)
+    assert code in (1, 3)
+    mine = [m for m in out["regime_models"] if m["sample"] == "study sample 7"]
+    assert {m["regime"] for m in mine} == {m["regime"] for m in out["regime_models"]
+                                          if m["sample"] == "nominal"}
+    assert not any(m["sample"] == "study sample 8" for m in out["regime_models"])
+    for m in mine:
+        if m["model"] == "sliding":
+            v = m["speed_m_per_s"]
+            level = fc + (fs - fc) * math.exp(-((v / lugre.vs) ** lugre.delta))
+            assert m["friction_level_n"] == pytest.approx(level, rel=1e-9)

@@ -16,14 +16,16 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from ._common import (
-    STARTS,
     FRACTION,
+    STARTS,
     RunOutput,
     add_common_options,
     add_workers_option,
     default_workers,
+    number,
     print_json,
     require_section,
     save_figure,
@@ -35,6 +37,7 @@ __all__ = ["add_parser", "run", "exit_status", "EXIT_VERIFIED", "EXIT_NOT_VERIFI
            "EXIT_LINEAR_ONLY"]
 
 VARIABLES = ("c", "kv", "kp", "ti")
+SPREAD_SAMPLES = number(1, 20, integer=True, example=4)
 EXIT_VERIFIED, EXIT_NOT_VERIFIED, EXIT_LINEAR_ONLY = 0, 1, 3
 FIGURES = ("compliance.png", "nonlinear.png", "bode_before.png", "bode_after.png", "lobes.png",
            "modes.png", "two_mass.png")
@@ -75,6 +78,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--no-simulation", action="store_true",
                    help="skip the nonlinear verification (the design is then not called "
                         "verified; exit status 3 when the linear checks hold)")
+    p.add_argument("--spread-from", type=Path, default=None, metavar="STUDY",
+                   help="results.parquet (or folder) of a friction-spread study (servotune "
+                        "study): its worst samples become further friction models of every "
+                        "regime, so the design is tuned for them too")
+    p.add_argument("--spread-samples", type=SPREAD_SAMPLES, default=4, metavar="N",
+                   help="how many of the study's worst samples (1 to 20, default 4)")
     add_workers_option(p)
     add_common_options(p, plots=True)
     p.set_defaults(func=run)
@@ -101,6 +110,14 @@ def run(args) -> int:
         axis = load_axis(args.axis)
     require_section(axis, "friction", "[friction]",
                     "servotune tune (the guide-way pads are where C acts)")
+    if args.spread_from is not None:
+        import dataclasses
+
+        from ..study.spread import spread_from_study
+
+        samples = spread_from_study(args.spread_from, args.spread_samples)
+        axis = dataclasses.replace(axis, tuning=dataclasses.replace(
+            axis.tuning, friction_samples=samples))
     with progress.task(f"{axis.name}: model checks"):
         checks = axis_model_checks(axis).require()
     for text in checks.warnings:
