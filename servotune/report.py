@@ -22,6 +22,7 @@ __all__ = [
     "tuning_report_html",
     "write_html_report",
     "write_tuning_files",
+    "html_page",
 ]
 
 
@@ -198,17 +199,7 @@ def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
         for png, title in figures)
     source = axis.path.name if base is None else _relative(axis.file, base)
     stamp = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>servotune: {html.escape(axis.name)}</title>
-<style>
-body {{ font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }}
-table {{ border-collapse: collapse; margin: 0.5em 0; }}
-td, th {{ border: 1px solid #bbb; padding: 3px 9px; text-align: right; }}
-td:first-child {{ text-align: left; }}
-img {{ max-width: 100%; border: 1px solid #ddd; margin-bottom: 1em; }}
-.ok {{ color: #075; font-weight: bold; }} .bad {{ color: #a00; font-weight: bold; }}
-ul.notes {{ font-size: 90%; color: #444; }}
-</style></head><body>
+    return html_page(f"servotune: {axis.name}", f"""
 <h1>Feed-axis tuning: {html.escape(axis.name)}</h1>
 <p>{html.escape(axis.description)}<br>Axis description: <code>{html.escape(str(source))}</code>;
 written {stamp} by servotune. Method: Bianchi et al., "Analysis of vibration damping in machine
@@ -222,8 +213,28 @@ budget and a nonlinear verdict. SI units; frequencies in Hz.</p>
 <p>Solver: {r.stats["starts"]} starts, {r.stats["iterations"]} IPOPT iterations,
 {r.stats["exchange_rounds"]} grid-exchange rounds, {r.stats["models"]} regime models,
 {r.stats["time_s"]:.1f} s.</p>
-</body></html>
+""")
+
+
+#: the style of every page servotune writes
+PAGE_CSS = """
+body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }
+table { border-collapse: collapse; margin: 0.5em 0; }
+td, th { border: 1px solid #bbb; padding: 3px 9px; text-align: right; }
+td:first-child { text-align: left; }
+img { max-width: 100%; border: 1px solid #ddd; margin-bottom: 1em; }
+.ok { color: #075; font-weight: bold; } .bad { color: #a00; font-weight: bold; }
+ul.notes { font-size: 90%; color: #444; }
 """
+
+
+def html_page(title: str, body: str) -> str:
+    """A self-contained HTML page in servotune's style (``body`` is HTML already)."""
+    import html
+
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>'
+            f"{html.escape(title)}</title>\n<style>{PAGE_CSS}</style></head><body>{body}"
+            "</body></html>\n")
 
 
 def _relative(path: Path, base: Path) -> str:

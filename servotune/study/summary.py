@@ -152,15 +152,9 @@ def summary_html(study, run, summary: StudySummary, figures) -> str:
         f"<h3>{esc(title)}</h3><img alt='{esc(title)}' "
         f"src='data:image/png;base64,{base64.b64encode(png).decode('ascii')}'/>"
         for png, title in figures)
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>servotune study: {esc(study.name)}</title>
-<style>
-body {{ font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }}
-table {{ border-collapse: collapse; margin: 0.5em 0; }}
-td, th {{ border: 1px solid #bbb; padding: 3px 9px; text-align: right; }}
-td:first-child {{ text-align: left; }}
-img {{ max-width: 100%; border: 1px solid #ddd; margin-bottom: 1em; }}
-</style></head><body>
+    from ..report import html_page
+
+    return html_page(f"servotune study: {study.name}", f"""
 <h1>Study: {esc(study.name)}</h1>
 <p>{esc(head)}. Axes: {esc(", ".join(a.rsplit("/", 1)[-1] for a in study.axes))};
 computed per sample: {esc(", ".join(study.compute))}; {len(study.sample_list())} samples
@@ -174,8 +168,7 @@ computed per sample: {esc(", ".join(study.compute))}; {len(study.sample_list())}
  + "</table>" if failures else ""}
 <h2>Figures</h2>
 {figs}
-</body></html>
-"""
+""")
 
 
 def write_summary(study, run, plots: bool = True) -> tuple[StudySummary, list]:
