@@ -115,6 +115,11 @@ def _interrupted(label: str, args, what: str | None) -> int:
     from .. import interrupt
 
     interrupt.restore_stderr()
+    try:  # a progress bar's line may still stand (its clearing went to the silenced stderr)
+        if sys.stderr.isatty():
+            sys.stderr.write("\r\x1b[K")
+    except (AttributeError, ValueError, OSError):
+        pass
     run = getattr(args, "run_output", None)
     done = (f"the results in {run.path} were written before" if run is not None
             and run.committed else "nothing was written")
