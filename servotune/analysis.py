@@ -149,17 +149,27 @@ class ComplianceCurve:
     values: np.ndarray
     peak_compliance: float
     peak_frequency: float
+    band: tuple[float, float] | None = None     # where the peak was sought [rad/s]
+
+    @property
+    def at_edge(self) -> bool:
+        """The peak lies at an edge of its band (within 3 % in frequency): the largest value
+        there, not a resonance; the true peak may lie outside the band."""
+        if self.band is None or not np.isfinite(self.peak_frequency):
+            return False
+        lo, hi = self.band
+        return bool(self.peak_frequency <= lo * 1.03 or self.peak_frequency >= hi / 1.03)
 
     def to_dict(self) -> dict:
         return {"label": self.label, "peak_compliance": self.peak_compliance,
-                "peak_frequency_hz": self.peak_frequency * HZ}
+                "peak_frequency_hz": self.peak_frequency * HZ, "peak_at_edge": self.at_edge}
 
 
 def _curve(label, plant, omega, band) -> ComplianceCurve:
     values = frequency.compliance(plant, omega)
     sel = (omega >= band[0]) & (omega <= band[1])
     value, where = frequency.peak(omega[sel], values[sel])
-    return ComplianceCurve(label, omega, values, value, where)
+    return ComplianceCurve(label, omega, values, value, where, (float(band[0]), float(band[1])))
 
 
 def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,

@@ -109,3 +109,24 @@ def test_the_bundled_gains_are_unstable_with_the_digital_drive_and_the_error_say
     assert main(["bode", str(MODELS / "paper_x_axis"), "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err
     assert "unstable" in err and "--continuous" in err and "[drive.sampling]" in err
+
+
+def test_a_compliance_peak_at_the_band_edge_is_flagged(tmp_path, capsys):
+    # the starter axis resonates near 112 Hz (standing, locked pads): over 5-300 Hz the peak
+    # is that resonance; over 150-300 Hz the largest value is at 150 Hz, the band's edge, and
+    # the command says so instead of reporting it as a peak
+    from servotune.cli import main
+    from servotune.template import write_template
+
+    write_template(tmp_path / "ax")
+    assert main(["compliance", str(tmp_path / "ax"), "--contact", "locked", "--json",
+                 "--no-plots", "--out", str(tmp_path / "o")]) == 0
+    inside = json.loads(capsys.readouterr().out)
+    assert 100.0 < inside["peak_frequency_hz"] < 125.0 and inside["peak_at_edge"] is False
+    text = (tmp_path / "ax" / "axis.toml").read_text()
+    (tmp_path / "ax" / "axis.toml").write_text(text.replace("band_hz = [5.0, 300.0]",
+                                                            "band_hz = [150.0, 300.0]"))
+    assert main(["compliance", str(tmp_path / "ax"), "--contact", "locked", "--no-plots",
+                 "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert "AT THE BAND EDGE (150-300 Hz)" in out

@@ -71,6 +71,7 @@ def run(args) -> int:
            "controlled": controlled, "notes": notes,
            "peak_compliance": main.peak_compliance,
            "peak_frequency_hz": main.peak_frequency * HZ,
+           "peak_at_edge": main.at_edge,
            "curves": [c.to_dict() for c in curves],
            "fig9": [dict(c.to_dict(), c=cv) for c, cv in zip(fig9_curves, FIG9_C, strict=False)],
            "folder": str(run.path), "figures": [str(run.file(n)) for n in names]}
@@ -99,7 +100,10 @@ def run(args) -> int:
         print(f"  note: {note}")
     for c in curves:
         print(f"  {c.label:55} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * HZ:.2f} Hz")
+              f"{c.peak_frequency * HZ:.2f} Hz"
+              + (f"  AT THE BAND EDGE ({c.band[0] * HZ:g}-{c.band[1] * HZ:g} Hz): the largest "
+                 "value there, not a resonance; widen [requirements] band_hz to find the peak"
+                 if c.at_edge else ""))
     for c in fig9_curves:
         print(f"  no control, {c.label:43} peak {c.peak_compliance:.4g} m/N at "
               f"{c.peak_frequency * HZ:.2f} Hz")
