@@ -992,6 +992,15 @@ def axis_from_tables(data: dict, file) -> Axis:
     drive = _drive(data, structure, file, defaults)
     cutting = _cutting(data, file)
     requirements = _requirements(data, file)
+    if "requirements" not in data:
+        r = requirements
+        lo, hi = (w / (2.0 * math.pi) for w in r.band)
+        defaults.append(f"[requirements] absent: the defaults, band {lo:g}-{hi:g} Hz of the "
+                        f"compliance peak, Ms velocity <= {r.ms_velocity_max:g}, position <= "
+                        f"{r.ms_position_max:g}, no required depth")
+    if "tuning" not in data and drive is not None:
+        defaults.append("[tuning] absent: C, Kv, Kp, Ti all free within the default bounds "
+                        "(servotune.design.DEFAULT_BOUNDS)")
     if drive is not None and drive.limits is None:
         defaults.append("[drive.motor] has no torque_peak and torque_continuous: the thrust "
                         "budget is not checked")

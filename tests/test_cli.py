@@ -503,3 +503,27 @@ def test_torque_max_stays_accepted_as_the_older_name_of_torque_peak(tmp_path):
     # with torque_continuous it is the peak torque of the thrust budget
     axis = load_axis(_starter(tmp_path, "torque_peak = 36.0", "torque_max = 36.0"))
     assert axis.drive.limits.torque_peak == 36.0
+
+
+@pytest.mark.parametrize("command", ["bode", "modes", "compliance"])
+def test_an_omitted_section_is_stated_in_one_line_of_the_output(command, tmp_path, capsys):
+    # the starter axis without [requirements] and [tuning]: the defaults that stand in are
+    # said, once each, in the text output and in the JSON notes
+    from servotune.template import write_template
+
+    write_template(tmp_path / "ax")
+    lines, keep = [], True
+    for line in (tmp_path / "ax" / "axis.toml").read_text().splitlines():
+        if line.startswith("["):
+            keep = not line.startswith(("[requirements]", "[tuning]"))
+        if keep:
+            lines.append(line)
+    (tmp_path / "ax" / "axis.toml").write_text("\n".join(lines) + "\n")
+    argv = [command, str(tmp_path / "ax"), "--out", str(tmp_path / "o")]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert text.count("[requirements] absent: the defaults, band 5-300 Hz") == 1
+    assert text.count("[tuning] absent") == 1
+    assert main([*argv, "--json"]) == 0
+    notes = json.loads(capsys.readouterr().out)["notes"]
+    assert sum("[requirements] absent" in n for n in notes) == 1

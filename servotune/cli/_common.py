@@ -399,16 +399,11 @@ def require_section(axis, attribute: str, section: str, command: str, fix: str =
                        f"(servotune init DIR writes a commented example){fix}")
 
 
-def default_notes(axis, sections=("requirements",)) -> list[str]:
-    """One line per optional section that ``axis`` omits, saying which default stands in
-    (for the text output and the ``notes`` of the JSON)."""
-    notes = []
-    present = set(getattr(axis, "tables", {}) or {})
-    if "requirements" in sections and "requirements" not in present:
-        lo, hi = (w / (2.0 * math.pi) for w in axis.requirements.band)
-        notes.append(f"no [requirements] section: the default band {lo:g}-{hi:g} Hz of the "
-                     "compliance peak")
-    return notes
+def default_notes(axis) -> list[str]:
+    """One line per default that stands in for what the axis description omits (an optional
+    section or field), as the loader recorded them (for the text output and the ``notes`` of
+    the JSON)."""
+    return list(getattr(axis, "defaults", ()) or ())
 
 
 # --- the output policy -------------------------------------------------------------------------

@@ -17,6 +17,7 @@ from ._common import (
     add_contact_options,
     axis_from_args,
     contact_from_args,
+    default_notes,
     print_json,
     require_section,
     save_figure,
@@ -61,7 +62,8 @@ def run(args) -> int:
     out = {"axis": axis.name, "kv": axis.drive.kv,
            "kv_m_per_min_per_mm": axis.drive.kv_m_per_min_per_mm, **result.to_dict(),
            "folder": str(run.path), "figures": [str(run.file(n)) for n in names],
-           "warnings": list(checks.warnings), "model_checks": checks.to_dict()}
+           "warnings": list(checks.warnings), "model_checks": checks.to_dict(),
+           "notes": default_notes(axis)}
     with progress.task(f"writing {run.path}"), run.writing() as folder:
         if names:
             save_figure(result.plot(f"{axis.name}: loops with {contact.note}"), folder / names[0])
@@ -71,6 +73,8 @@ def run(args) -> int:
         return 0
     print(f"{axis.name}: loops with {contact.note}; Kv = {axis.drive.kv:.3g} 1/s "
           f"({axis.drive.kv_m_per_min_per_mm:.3g} (m/min)/mm)")
+    for note in out["notes"]:
+        print(f"  default taken: {note}")
     print(f"  {'loop':10} {'PM [deg]':>9} {'GM [dB]':>8} {'lower GM [dB]':>14} {'Ms':>6} "
           f"{'crossover [Hz]':>15} {'bandwidth [Hz]':>15}")
     for name in ("velocity", "position"):

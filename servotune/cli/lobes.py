@@ -14,6 +14,7 @@ from ._common import (
     add_contact_options,
     axis_from_args,
     contact_from_args,
+    default_notes,
     number,
     print_json,
     require_section,
@@ -224,7 +225,7 @@ def run(args) -> int:
         out["required_depth_m"] = required
         out["margin"] = result.margin(required)
     out["warnings"] = [str(w.message) for w in caught]
-    out["notes"] = [note] if note else []
+    out["notes"] = ([note] if note else []) + (default_notes(axis) if axis is not None else [])
     out["folder"] = str(run_out.path)
     out["figures"] = [str(run_out.file(n)) for n in names]
     with progress.task(f"writing {run_out.path}"), run_out.writing() as folder:

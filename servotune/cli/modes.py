@@ -113,8 +113,8 @@ def run(args) -> int:
         lo, hi = band[0] * HZ, band[1] * HZ
         print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
               f"{peak['wp_x_peak_hz']:.2f} Hz ({lo:g}-{hi:g} Hz)")
-        for note in result["notes"]:
-            print(f"  note: {note}")
+    for note in result["notes"]:
+        print(f"  default taken: {note}")
     if coverage.reduced:
         print(f"  {'WARNING: ' if not coverage.covered else ''}{coverage.message}")
     print(f"  wrote {out.path}")

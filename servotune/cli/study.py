@@ -29,8 +29,8 @@ def _scheduler(text: str) -> str:
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
-        "study", help="a study: an axis sampled over what varies (friction spread, gains, "
-                      "axes), tuned, verified or analysed per sample on dask.distributed",
+        "study", help="an axis sampled over what varies, tuned/verified per sample on "
+                      "dask.distributed",
         description="Run a study file (TOML: [study] name, axes, compute = tune, verify, "
                     "lobes, compliance, samples, seed; [vary.\"section.key\"] a list, a grid "
                     "or a distribution per varied axis.toml field; see servotune.study.spec). "
