@@ -99,8 +99,10 @@ def add_parser(subparsers) -> None:
                    help="down (climb) or up (conventional) milling (down)")
     p.add_argument("--speed-rpm", nargs=2, type=_RPM, metavar=("MIN", "MAX"),
                    help="spindle-speed range [rpm] (default: the first ten lobes)")
-    p.add_argument("--speeds", type=_SPEEDS,
+    p.add_argument("--speed-count", type=_SPEEDS, dest="speeds", metavar="N",
                    help="number of spindle speeds (default 2000 for zoa, 200 for sdm)")
+    # older spelling, kept: --speeds (a count, easily read as speeds in m/s or rpm)
+    p.add_argument("--speeds", type=_SPEEDS, dest="speeds", help=argparse.SUPPRESS)
     p.add_argument("--method", choices=("zoa", "sdm"), default="zoa",
                    help="zoa: zero-order approximation; sdm: semi-discretisation (slower; "
                         "finds the flip lobes of low immersion; needs --mode)")
