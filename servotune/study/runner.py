@@ -137,8 +137,10 @@ def _client(scheduler: str | None, workers: int):
         return Client(scheduler, timeout="20s"), None
     env = {name: "1" for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
                                   "MKL_NUM_THREADS")}
+    # on this machine only (loopback); the scheduler's HTTP server on a free port, so that
+    # two studies at once do not compete for dask's default 8787
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, env=env, silence_logs=40)
+                           dashboard_address="127.0.0.1:0", env=env, silence_logs=40)
     return Client(cluster), cluster
 
 
