@@ -155,7 +155,7 @@ def run_job(axis_path, workers: int, simulate: bool, starts: int, plots: bool) -
         phases["load_axis"] = time.perf_counter() - t_job
         files = ["report.html", "results.json"] + ([] if not plots else
                                                    ["compliance.png", "nonlinear.png",
-                                                    "bode_before.png", "bode_after.png",
+                                                    "bode.png",
                                                     "lobes.png", "modes.png", "two_mass.png"])
         out = _common.RunOutput(tmp.name, "tune", axis.name, files)
         simulate = simulate and axis.drive is not None and axis.friction is not None

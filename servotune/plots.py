@@ -402,7 +402,8 @@ def plot_stability_map(stability_map, zoa=None, title: str | None = None) -> Fig
     return fig
 
 
-def plot_bode(loops, analyses=None, title: str = "Loop transfer functions") -> Figure:
+def plot_bode(loops, analyses=None, title: str = "Loop transfer functions",
+              styles=None) -> Figure:
     """Bode diagram of loop transfer functions with their margins marked.
 
     Parameters
@@ -411,6 +412,8 @@ def plot_bode(loops, analyses=None, title: str = "Loop transfer functions") -> F
         ``{name: (omega [rad/s], L(j omega) complex array)}``.
     analyses : dict, optional
         ``{name: LoopAnalysis}``; crossover, phase margin and gain margin are marked.
+    styles : dict, optional
+        ``{name: (colour, line style)}`` (default: a colour per loop, solid lines).
     """
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
@@ -418,10 +421,11 @@ def plot_bode(loops, analyses=None, title: str = "Loop transfer functions") -> F
     for i, (name, (omega, values)) in enumerate(loops.items()):
         f_hz = np.asarray(omega) * HZ_PER_RAD_S
         values = np.asarray(values).reshape(-1)
-        color = colors[i % len(colors)]
-        ax_mag.semilogx(f_hz, 20 * np.log10(np.abs(values)), color=color, lw=1.5,
+        color, ls = (styles or {}).get(name, (colors[i % len(colors)], "-"))
+        ax_mag.semilogx(f_hz, 20 * np.log10(np.abs(values)), color=color, lw=1.5, ls=ls,
                         label=f"{name} loop")
-        ax_ph.semilogx(f_hz, np.degrees(np.unwrap(np.angle(values))), color=color, lw=1.5)
+        ax_ph.semilogx(f_hz, np.degrees(np.unwrap(np.angle(values))), color=color, lw=1.5,
+                       ls=ls)
         a = (analyses or {}).get(name)
         if a is None:
             continue

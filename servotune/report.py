@@ -109,12 +109,20 @@ def tuning_figures(job) -> list[tuple[str, str, object]]:
                         job.verdict.regimes, linear,
                         title=f"{name}: LuGre time simulation (sweep envelopes) against the "
                               "linear models")))
-    if job.loops_before is not None:
-        out.append(("bode_before.png", "Loops before (Bode, margins)",
-                    job.loops_before.plot(f"{name}: loops before")))
-    if job.loops_after is not None:
-        out.append(("bode_after.png", "Loops after (Bode, margins)",
-                    job.loops_after.plot(f"{name}: loops after")))
+    loops, analyses, styles = {}, {}, {}
+    for tag, ls, report in (("before", "--", job.loops_before), ("after", "-", job.loops_after)):
+        if report is None:
+            continue
+        for loop, colour in (("velocity", "tab:blue"), ("position", "tab:red")):
+            key = f"{loop}, {tag}"
+            loops[key] = (report.omega, getattr(report, f"l_{loop}"))
+            analyses[key] = getattr(report, loop)
+            styles[key] = (colour, ls)
+    if loops:
+        shown = " and ".join(t for t, r in (("before (dashed)", job.loops_before),
+                                            ("after (solid)", job.loops_after)) if r is not None)
+        out.append(("bode.png", "Loops before and after (Bode, margins)", plots.plot_bode(
+            loops, analyses, title=f"{name}: loops {shown}", styles=styles)))
     lobes = [x for x in (job.lobes_before, job.lobes_after) if x is not None]
     if lobes:
         labels = [lab for lab, x in (("before", job.lobes_before), ("after", job.lobes_after))

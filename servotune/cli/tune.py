@@ -39,7 +39,7 @@ __all__ = ["add_parser", "run", "exit_status", "EXIT_VERIFIED", "EXIT_NOT_VERIFI
 VARIABLES = ("c", "kv", "kp", "ti")
 SPREAD_SAMPLES = number(1, 20, integer=True, example=4)
 EXIT_VERIFIED, EXIT_NOT_VERIFIED, EXIT_LINEAR_ONLY = 0, 1, 3
-FIGURES = ("compliance.png", "nonlinear.png", "bode_before.png", "bode_after.png", "lobes.png",
+FIGURES = ("compliance.png", "nonlinear.png", "bode.png", "lobes.png",
            "modes.png", "two_mass.png")
 
 
