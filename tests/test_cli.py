@@ -338,7 +338,8 @@ def _flag_table():
 def test_the_readme_flag_table_matches_the_commands():
     rows = _flag_table()
     assert set(rows) == {"--json", "--quiet", "--out", "--no-plots", "--workers", "--duration",
-                         "--force", "--continuous"}
+                         "--force", "--continuous", "--speed", "--speed-rpm", "--speed-count",
+                         "--force-pp"}
     for flag, commands in rows.items():
         if commands == ["all"]:
             commands = list(COMMANDS)
@@ -527,3 +528,22 @@ def test_an_omitted_section_is_stated_in_one_line_of_the_output(command, tmp_pat
     assert main([*argv, "--json"]) == 0
     notes = json.loads(capsys.readouterr().out)["notes"]
     assert sum("[requirements] absent" in n for n in notes) == 1
+
+
+def test_the_results_of_another_axis_of_the_same_name_are_not_replaced(tmp_path, capsys):
+    # two copies of the starter axis share [axis] name: the second bode run into the same
+    # --out would replace the first one's results; it refuses, naming the other axis, and
+    # leaves them as they were; the first axis itself may run again
+    from servotune.template import write_template
+
+    for name in ("a", "b"):
+        write_template(tmp_path / name, name="same")
+    out = tmp_path / "out"
+    assert main(["bode", str(tmp_path / "a"), "--no-plots", "--out", str(out)]) == 0
+    before = (out / "bode_same" / "results.json").read_bytes()
+    capsys.readouterr()
+    assert main(["bode", str(tmp_path / "b"), "--no-plots", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "another axis of the same name" in err and str((tmp_path / "a").resolve()) in err
+    assert (out / "bode_same" / "results.json").read_bytes() == before
+    assert main(["bode", str(tmp_path / "a"), "--no-plots", "--out", str(out)]) == 0

@@ -470,21 +470,26 @@ class RunOutput:
 
     MANIFEST = ".servotune-run.json"
 
-    def __init__(self, out, command: str, subject: str, files=()):
+    def __init__(self, out, command: str, subject: str, files=(), source=None):
         self.out = Path(out)
         self.command = str(command)
         self.subject = str(subject)
         self.name = f"{safe_name(command)}_{safe_name(subject)}"
         self.path = self.out / self.name
         self.files = tuple(files)
+        self.source = None if source is None else str(Path(source).resolve())
         self.committed = False
         self.check()
 
     @classmethod
     def for_args(cls, args, command: str, subject: str, files=()) -> RunOutput:
         """The run folder of a parsed command line (``args.out``), checked now; remembered on
-        ``args`` so that an interruption can say whether anything was written."""
-        run = cls(args.out, command, subject, files)
+        ``args`` so that an interruption can say whether anything was written. The axis
+        folder of the command line (``args.axis``), when there is one, is the run's source:
+        the results of another axis of the same name are not replaced."""
+        axis = getattr(args, "axis", None)
+        source = axis if isinstance(axis, str | Path) and Path(axis).exists() else None
+        run = cls(args.out, command, subject, files, source=source)
         args.run_output = run
         return run
 
@@ -519,6 +524,12 @@ class RunOutput:
                               "folder you can write to")
         if self.path.resolve().parent != out.resolve():  # pragma: no cover - safe_name holds
             raise OutputError(f"{self.name!r} would be written outside {out}")
+        other = self._other_source()
+        if other:
+            raise OutputError(
+                f"{self.path} holds the results of 'servotune {self.command.replace('_', ' ')}' "
+                f"on {other}, another axis of the same name; this run would replace them: give "
+                "another --out or another [axis] name")
         lost = self.foreign()
         if lost:
             shown = ", ".join(lost[:5]) + (" ..." if len(lost) > 5 else "")
@@ -527,6 +538,17 @@ class RunOutput:
                 f"{self.command.replace('_', ' ')}' run wrote; this run replaces that folder "
                 f"and would delete {'it' if len(lost) == 1 else 'them'}: move "
                 f"{'it' if len(lost) == 1 else 'them'} elsewhere or give another --out")
+
+    def _other_source(self) -> str | None:
+        """The source of the earlier results in the run folder when it is not this run's."""
+        if self.source is None:
+            return None
+        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):
+            data = json.loads((self.path / self.MANIFEST).read_text())
+            earlier = data.get("source")
+            if data.get("command") == self.command and earlier and earlier != self.source:
+                return earlier
+        return None
 
     def foreign(self) -> list[str]:
         """Entries of the run folder that this command did not write (they would be lost)."""
@@ -579,7 +601,8 @@ class RunOutput:
             yield stage
             files = sorted(str(p.relative_to(stage)) for p in stage.rglob("*") if p.is_file())
             (stage / self.MANIFEST).write_text(json.dumps(
-                {"command": self.command, "subject": self.subject, "files": files},
+                {"command": self.command, "subject": self.subject, "files": files,
+                 "source": self.source},
                 indent=1) + "\n")
             self._swap(stage)
         except BaseException as exc:
