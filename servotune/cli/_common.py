@@ -238,6 +238,9 @@ def add_common_options(parser, *, out: bool = True, plots: bool = False,
     if plots:
         parser.add_argument("--no-plots", action="store_true",
                             help="write no figures (faster; matplotlib is not loaded)", **keep)
+    elif not nested:
+        command = parser.prog.split(" ", 1)[-1]
+        refuse_no_plots(parser, command, "results.json" if out else "the axis files")
 
 
 def refuse_no_plots(parser, command: str, writes: str = "results.json") -> None:

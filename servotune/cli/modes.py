@@ -23,7 +23,6 @@ from ._common import (
     add_common_options,
     default_notes,
     print_json,
-    refuse_no_plots,
     write_results,
 )
 
@@ -50,7 +49,6 @@ def add_parser(subparsers) -> None:
     p.add_argument("--count", type=COUNT, default=None,
                    help="show only the lowest COUNT modes in the text output")
     add_common_options(p)
-    refuse_no_plots(p, "modes")  # the modes are a table: results.json and the text output
     p.set_defaults(func=run)
 
 
