@@ -83,7 +83,7 @@ def _primary(rows):
     return "peak_compliance_m_per_n", "claimed compliance peak [m/N]"
 
 
-def summary_figures(rows: list[dict], name: str):
+def summary_figures(rows: list[dict], name: str, tuned: bool = True):
     """(file name, title, figure) of a study: the realised peak and b_crit against each
     varied numeric field (verified samples in green, others in red), the spread of the tuned
     design."""
@@ -115,7 +115,7 @@ def summary_figures(rows: list[dict], name: str):
         fig.tight_layout()
         out.append(("study_results.png", "Results against each varied field", fig))
     gains = [(k, lab) for k, lab in RESULTS[3:] if _numbers(ok, k).size > 1]
-    if gains and any("kv" in r for r in ok):
+    if tuned and gains:
         fig, axes = plt.subplots(1, len(gains), squeeze=False, figsize=(3.6 * len(gains), 3.2))
         for ax, (k, lab) in zip(axes[0], gains, strict=True):
             ax.hist(_numbers(ok, k), bins=min(30, max(5, len(ok) // 5)), color="#357")
@@ -139,7 +139,8 @@ def summary_html(study, run, summary: StudySummary, figures) -> str:
     varied = "".join(
         f"<tr><td>{esc(v.path)}</td><td>"
         + esc(f"{v.distribution} {dict(v.parameters)}" if v.random else str(list(v.values)))
-        + f"</td><td>{'x axis value' if v.relative else 'value'}</td></tr>"
+        + f"</td><td>{'factor on the axis&#39; own value' if v.relative else 'value'}"
+        "</td></tr>"
         for v in study.variations)
     labels = dict(RESULTS)
     spreads = "".join(
@@ -188,7 +189,7 @@ def write_summary(study, run, plots: bool = True) -> tuple[StudySummary, list]:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        for name, title, fig in summary_figures(rows, study.name):
+        for name, title, fig in summary_figures(rows, study.name, "tune" in study.compute):
             buffer = io.BytesIO()
             fig.savefig(buffer, format="png", dpi=110)
             plt.close(fig)
