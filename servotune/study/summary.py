@@ -147,7 +147,11 @@ def summary_html(study, run, summary: StudySummary, figures) -> str:
         f"<tr><td>{esc(labels[k])}</td><td>{s['min']:.4g}</td><td>{s['median']:.4g}</td>"
         f"<td>{s['max']:.4g}</td><td>{s['count']}</td></tr>"
         for k, s in summary.spreads.items())
-    failures = "".join(f"<tr><td>{i}</td><td>{esc(str(e))}</td></tr>"
+    def short(text, n=240):
+        text = str(text)
+        return text if len(text) <= n else text[:n] + " ..."
+
+    failures = "".join(f"<tr><td>{i}</td><td style='text-align: left'>{esc(short(e))}</td></tr>"
                        for i, e in summary.failures[:50])
     figs = "".join(
         f"<h3>{esc(title)}</h3><img alt='{esc(title)}' "
@@ -165,10 +169,11 @@ computed per sample: {esc(", ".join(study.compute))}; {len(study.sample_list())}
 <table><tr><th>field</th><th>how</th><th>meaning</th></tr>{varied}</table>
 <h2>Results</h2>
 <table><tr><th></th><th>min</th><th>median</th><th>max</th><th>samples</th></tr>{spreads}</table>
-{"<h2>Failed samples</h2><table><tr><th>sample</th><th>reason</th></tr>" + failures
- + "</table>" if failures else ""}
 <h2>Figures</h2>
 {figs}
+{"<h2>Failed samples</h2><p>The first 50; the whole reasons are in results.parquet (column "
+ "error).</p><table><tr><th>sample</th><th>reason</th></tr>" + failures + "</table>"
+ if failures else ""}
 """)
 
 
