@@ -94,10 +94,10 @@ def test_the_command_exits_130_on_ctrl_c_with_one_line_and_no_partial_results(tm
     out = tmp_path / "out"
     command = [sys.executable, "-c", "import sys; from servotune.cli import main; "
                "sys.exit(main(sys.argv[1:]))", "table3", str(ROOT / "models" / "paper_x_axis"),
-               "--workers", "2", "--out", str(out)]
+               "--workers", "2", "--duration", "600", "--out", str(out)]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True, cwd=tmp_path)
-    time.sleep(8.0)  # loaded and simulating (the trials take minutes)
+    time.sleep(8.0)  # loaded and simulating (15 trials of 600 s sweeps take minutes)
     assert process.poll() is None
     process.send_signal(signal.SIGINT)
     stdout, stderr = process.communicate(timeout=60)

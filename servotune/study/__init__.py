@@ -3,7 +3,7 @@ verified, or analysed as a task on dask.distributed, every row written as it com
 
 >>> from servotune.study import DISTRIBUTIONS
 >>> sorted(DISTRIBUTIONS)
-['loguniform', 'lognormal', 'normal', 'triangular', 'uniform']
+['lognormal', 'loguniform', 'normal', 'triangular', 'uniform']
 """
 
 from .runner import StudyFolderError, StudyRun, read_rows, run_study, study_folder
