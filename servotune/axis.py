@@ -732,6 +732,8 @@ def _cutting(data, file) -> Cutting | None:
     direction = table.get("direction", "x")
     if direction not in ("x", "y"):
         raise _err(file, "[cutting] direction", f"got {direction!r}", 'give "x" or "y"')
+    if "radial_immersion" in table:  # a/D: a slip such as 1e-9 would make the forces vanish
+        _number(table, "radial_immersion", file, "cutting", low=1e-3, high=1.0, unit="a/D")
     try:
         setup = MillingSetup(teeth=table["teeth"], kt=table["kt"], kn=table["kn"],
                              radial_immersion=table.get("radial_immersion", 1.0),
@@ -816,6 +818,11 @@ def _operation(data, drive, friction, cutting, requirements, file, defaults
                             cutting.direction)
         if force is None:
             force = cut.peak_to_peak
+            if not (math.isfinite(force) and force > 0.0):  # e.g. an immersion that cuts nothing
+                raise _err(file, "[cutting]", f"the cutting force at the required depth "
+                           f"{requirements.depth_required:g} m is {force!r} N peak to peak (no "
+                           "tooth engages)", "check radial_immersion, milling and the depth, or "
+                           "give [operation] process_force_pp")
             defaults.append(f"[operation] process_force_pp from [cutting] at the required depth "
                             f"{requirements.depth_required * 1e3:g} mm and "
                             f"{cutting.feed_per_tooth * 1e3:g} mm per tooth: {force:.4g} N")

@@ -145,7 +145,7 @@ kv_m_per_min_per_mm = 1.0           # the machine-tool Kv factor, or kv = 16.67 
 teeth = 4
 kt = 2.0e9                          # tangential cutting coefficient [N/m^2]
 kn = 0.6e9                          # normal (radial) cutting coefficient [N/m^2]
-radial_immersion = 0.5              # a/D in (0, 1]
+radial_immersion = 0.5              # a/D in [0.001, 1]
 milling = "down"                    # "down" or "up"
 speed_rpm = [3000.0, 12000.0]       # spindle-speed range [rpm]
 direction = "x"                     # the flexible (feed) direction: "x" or "y"

@@ -216,6 +216,9 @@ CASES = [
      "speed_filter: 2.0 is outside the plausible range [0, 0.05] s"),
     ("axis-speed-filter-negative", lambda t, s: ["modes", axis(t, s, sub(
         "speed_filter = 0.0", "speed_filter = -1.0e-3"))], 1, "speed_filter"),
+    ("axis-immersion-underflow", lambda t, s: ["tune", axis(t, s, sub(
+        "radial_immersion = 0.5", "radial_immersion = 2.4e-197"))], 1,
+     "[cutting] radial_immersion"),
     pytest.param("axis-kt-1e300", lambda t, s: ["lobes", axis(t, s, sub(
         "kt = 2.0e9", "kt = 1.0e300"))], 1, "kt"),
     pytest.param("axis-mass-1e300", lambda t, s: ["modes", _heavy(t, s)], 1, "mass",
