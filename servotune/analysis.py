@@ -19,6 +19,7 @@ from .axis import Axis
 from .chatter import stability_lobes
 from .drive import Drive
 from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
+from .units import HZ_PER_RAD_S
 
 __all__ = [
     "axis_contact",
@@ -32,7 +33,6 @@ __all__ = [
     "default_omega",
 ]
 
-HZ = 1.0 / (2.0 * math.pi)
 
 
 def default_omega(f_min_hz: float = 1.0, f_max_hz: float = 1000.0, n: int = 3000) -> np.ndarray:
@@ -162,7 +162,8 @@ class ComplianceCurve:
 
     def to_dict(self) -> dict:
         return {"label": self.label, "peak_compliance": self.peak_compliance,
-                "peak_frequency_hz": self.peak_frequency * HZ, "peak_at_edge": self.at_edge}
+                "peak_frequency_hz": self.peak_frequency * HZ_PER_RAD_S,
+                "peak_at_edge": self.at_edge}
 
 
 def _curve(label, plant, omega, band) -> ComplianceCurve:

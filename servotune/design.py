@@ -27,6 +27,7 @@ from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
 from .tuning import ChatterTarget, Design, TuningProblem, TuningResult, tune
+from .units import HZ_PER_RAD_S
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -44,7 +45,6 @@ __all__ = [
     "check_design",
 ]
 
-HZ = 1.0 / (2.0 * math.pi)
 
 #: Default search bounds (SI); ``kp`` is relative to the initial value. Ti stays at or below
 #: 0.2 s so that the velocity loop keeps its integral action (the compliance peak barely depends
@@ -237,7 +237,7 @@ class ModePeaks:
     def to_dict(self) -> dict:
         i = int(np.argmin(np.abs(np.log(self.c_values / self.c_chosen))))
         return {"c_chosen": self.c_chosen, "modes": [
-            {"frequency_at_chosen_c_hz": float(self.frequencies[m, i] * HZ),
+            {"frequency_at_chosen_c_hz": float(self.frequencies[m, i] * HZ_PER_RAD_S),
              "peak_at_chosen_c": float(self.peaks[m, i]),
              "c_best": float(self.c_best[m]),
              "peak_at_best_c": float(np.nanmin(self.peaks[m]))}
@@ -270,7 +270,7 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
         sub = plant[plant.output_labels.index("wp_x"), plant.input_labels.index("f_wp_x")]
         lam, v = np.linalg.eig(sub.A)
         res = (sub.C @ v).ravel() * np.linalg.solve(v, sub.B).ravel()
-        sel = (lam.imag > 0) & (lam.imag * HZ < f_max_hz)
+        sel = (lam.imag > 0) & (lam.imag * HZ_PER_RAD_S < f_max_hz)
         poles.append(lam[sel])
         peaks.append(2 * np.abs(res[sel]) / np.maximum(np.abs(lam[sel].real), 1e-300))
     start = int(np.argmin(np.abs(np.log(c_values / chosen))))
@@ -372,8 +372,9 @@ class AxisTuning:
             else r.initial.kv * 60.0 / 1000.0,
             "peak_compliance_before": _finite(before.peak_compliance),
             "peak_compliance_after": None if after is None else _finite(after.peak_compliance),
-            "peak_frequency_before_hz": _finite(before.peak_frequency * HZ),
-            "peak_frequency_after_hz": None if after is None else after.peak_frequency * HZ,
+            "peak_frequency_before_hz": _finite(before.peak_frequency * HZ_PER_RAD_S),
+            "peak_frequency_after_hz": (None if after is None
+                                        else after.peak_frequency * HZ_PER_RAD_S),
             "worst_regime_model_before": None if before.worst_model is None
             else before.worst_model.model.name,
             "worst_regime_model_after": None if after is None or after.worst_model is None
@@ -562,7 +563,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
             amp, freq = process_amplitude(axis, problem.drive_for(result.design),
                                           result.design.c, force)
             out["process"] = {"force_pp_n": force, "pad_amplitude_m": amp,
-                              "frequency_hz": freq * HZ,
+                              "frequency_hz": freq * HZ_PER_RAD_S,
                               "feed_force_n": axis.operation.feed_force}
         out["c_realisation"] = c_realisations(problem.thrust, result.design.c,
                                               axis.friction.lugre.sigma2, amp, freq,

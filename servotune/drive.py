@@ -45,6 +45,8 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
+from .units import KV_PER_M_PER_MIN_PER_MM, kv_from_m_per_min_per_mm, kv_to_m_per_min_per_mm
+
 __all__ = [
     "KV_PER_M_PER_MIN_PER_MM",
     "kv_from_m_per_min_per_mm",
@@ -63,28 +65,6 @@ __all__ = [
     "cascade_response",
     "current_loop_bandwidth",
 ]
-
-#: 1 (m/min)/mm of machine-tool Kv factor in 1/s: (1/60 m/s) / (1e-3 m) = 1000/60.
-KV_PER_M_PER_MIN_PER_MM = 1000.0 / 60.0
-
-
-def kv_from_m_per_min_per_mm(kv_m_per_min_per_mm: float) -> float:
-    """Position-loop gain Kv [1/s] from the machine-tool Kv factor [(m/min)/mm].
-
-    Examples
-    --------
-    The paper's Kv = 1 (m/min)/mm: a 1 mm following error per 1 m/min of feed.
-
-    >>> round(kv_from_m_per_min_per_mm(1.0), 4)
-    16.6667
-    """
-    return float(kv_m_per_min_per_mm) * KV_PER_M_PER_MIN_PER_MM
-
-
-def kv_to_m_per_min_per_mm(kv: float) -> float:
-    """The machine-tool Kv factor [(m/min)/mm] of a position-loop gain Kv [1/s]."""
-    return float(kv) / KV_PER_M_PER_MIN_PER_MM
-
 
 def _positive(owner: str, name: str, value, allow_zero: bool = False,
               allow_inf: bool = False) -> float:
@@ -267,7 +247,7 @@ PADE_PHASE_TOLERANCE_DEG = 1.0
 PADE_MAX_ORDER = 6
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _pade_unit(order: int):
     """Pade approximation of the unit delay e^-s as a balanced (A, B, C, D) (cached: read
     only)."""

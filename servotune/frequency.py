@@ -39,6 +39,7 @@ import scipy.linalg
 from .drive import Drive, cascade_response
 from .plant import Contact, UnstableLoopError
 from .structure.model import ModalModel
+from .units import HZ_PER_RAD_S
 
 __all__ = [
     "fast_frequency_response",
@@ -54,7 +55,6 @@ __all__ = [
     "peak",
 ]
 
-HZ = 1.0 / (2.0 * math.pi)
 
 
 def _omega(omega) -> np.ndarray:
@@ -637,7 +637,7 @@ class LoopAnalysis:
 
     @property
     def bandwidth_hz(self) -> float:
-        return self.bandwidth * HZ
+        return self.bandwidth * HZ_PER_RAD_S
 
     def to_dict(self) -> dict:
         """JSON-ready: SI plus the usual engineering units under suffixed keys."""
@@ -648,11 +648,11 @@ class LoopAnalysis:
             "gain_margin_lower_db": (self.gain_margin_lower_db
                                      if self.gain_margin_lower > 0 else None),
             "phase_margin_deg": self.phase_margin_deg,
-            "crossover_hz": self.crossover * HZ,
-            "phase_crossover_hz": (self.phase_crossover * HZ
+            "crossover_hz": self.crossover * HZ_PER_RAD_S,
+            "phase_crossover_hz": (self.phase_crossover * HZ_PER_RAD_S
                                    if math.isfinite(self.phase_crossover) else None),
             "ms": self.ms,
-            "ms_frequency_hz": self.ms_frequency * HZ,
+            "ms_frequency_hz": self.ms_frequency * HZ_PER_RAD_S,
             "bandwidth_hz": self.bandwidth_hz,
         }
 

@@ -45,9 +45,9 @@ import control
 import numpy as np
 
 from .drive import Drive, drive_blocks
-from .interconnect import connect
 from .friction.equivalent import describing_function
 from .friction.lugre import LuGreParameters, sliding_linearisation
+from .interconnect import connect
 from .structure.model import ModalModel, signal_name
 
 __all__ = ["Contact", "GuideWayFriction", "build_plant", "loop_transfer", "CONTACT_KINDS",

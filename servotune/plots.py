@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from . import twomass
+from .units import HZ_PER_RAD_S
 
 __all__ = [
     "plot_bode",
@@ -32,7 +33,6 @@ __all__ = [
     "plot_two_mass_compliance",
 ]
 
-HZ_PER_RAD_S = 1.0 / (2.0 * math.pi)
 
 
 def plot_g_alpha(alpha_max: float = 1.0, mark: float | None = None) -> Figure:

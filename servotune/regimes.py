@@ -43,6 +43,7 @@ import numpy as np
 from .friction.equivalent import describing_function
 from .friction.lugre import LuGreParameters, sliding_linearisation, stribeck_curve
 from .plant import Contact
+from .units import HZ_PER_RAD_S
 
 __all__ = [
     "REGIME_KINDS",
@@ -53,7 +54,6 @@ __all__ = [
     "stribeck_slope",
 ]
 
-HZ = 1.0 / (2.0 * math.pi)
 REGIME_KINDS = ("presliding", "describing", "sliding", "viscous")
 
 
@@ -221,7 +221,7 @@ class RegimeModel:
             element = control.ss([[0.0]], [[1.0]], [[keq]], [[ceq + c]])
             return Contact("sliding", system=element,
                            note=f"describing function at A = {self.amplitude:.3g} m, "
-                                f"{self.frequency * HZ:.1f} Hz: Keq = {keq:.3g} N/m, "
+                                f"{self.frequency * HZ_PER_RAD_S:.1f} Hz: Keq = {keq:.3g} N/m, "
                                 f"Ceq = {ceq + c:.3g} N s/m")
         return Contact.sliding(sliding_linearisation(dataclasses.replace(p, sigma2=c),
                                                      self.speed), self.speed)
@@ -241,7 +241,7 @@ class RegimeModel:
                "sample": self.sample, "speed_m_per_s": self.speed, "cutting": self.cutting}
         if self.kind == "describing":
             keq, ceq = self._keq_ceq
-            out.update(amplitude_m=self.amplitude, frequency_hz=self.frequency * HZ,
+            out.update(amplitude_m=self.amplitude, frequency_hz=self.frequency * HZ_PER_RAD_S,
                        keq=keq, ceq_without_c=ceq)
         if self.kind == "sliding":
             out["friction_slope_without_c"] = self.slope()

@@ -12,11 +12,11 @@ import math
 from dataclasses import dataclass, field
 
 from .drive import kv_to_m_per_min_per_mm
+from .units import HZ_PER_RAD_S
 
 __all__ = ["Table", "inputs_table", "design_table", "regimes_table", "loops_table",
            "thrust_table", "realisation_table", "verdict_lines", "text", "html_table"]
 
-HZ = 1.0 / (2.0 * math.pi)
 
 
 @dataclass(frozen=True)
@@ -74,8 +74,8 @@ def inputs_table(job) -> Table:
                  f"current >= {req.current_bandwidth_ratio_min:g} x velocity; Ti x velocity "
                  f"bandwidth in [{req.ti_bandwidth_min:g}, {req.ti_bandwidth_max or math.inf:g}]"
                  f"; thrust reserve {req.thrust_margin:.0%}; nonlinear tolerance "
-                 f"{req.nonlinear_tolerance:.0%}; band {req.band[0] * HZ:.3g}-"
-                 f"{req.band[1] * HZ:.3g} Hz"))
+                 f"{req.nonlinear_tolerance:.0%}; band {req.band[0] * HZ_PER_RAD_S:.3g}-"
+                 f"{req.band[1] * HZ_PER_RAD_S:.3g} Hz"))
     notes = tuple(f"default taken: {d}" for d in job.notes)
     return Table("Inputs and requirements", ("", "", ""), tuple(rows), notes)
 
@@ -98,9 +98,9 @@ def design_table(job) -> Table:
               _f(None if after is None else after.peak_compliance)),
              ("  in the model", "-" if w0 is None or not r.before.stable else w0.model.name,
               "-" if w1 is None else w1.model.name),
-             ("  at [Hz]", _f(r.before.peak_frequency * HZ, "{:.1f}")
+             ("  at [Hz]", _f(r.before.peak_frequency * HZ_PER_RAD_S, "{:.1f}")
               if r.before.stable else "-",
-              "-" if after is None else _f(after.peak_frequency * HZ, "{:.1f}"))]
+              "-" if after is None else _f(after.peak_frequency * HZ_PER_RAD_S, "{:.1f}"))]
     if r.before.b_crit is not None or (after is not None and after.b_crit is not None):
         rows.append(("b_crit [mm] (worst model)",
                      _f(None if r.before.b_crit is None else r.before.b_crit * 1e3, "{:.3g}"),

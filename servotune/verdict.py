@@ -38,11 +38,11 @@ from .simulate.contact import LuGreFriction
 from .simulate.result import SimulationError
 from .simulate.scenario import constant_speed, planned_sweep, sweep_plan
 from .simulate.simulator import NonlinearAxis, simulate
+from .units import HZ_PER_RAD_S
 
 __all__ = ["Simulation", "RegimeVerdict", "Verdict", "nonlinear_verdict", "sweep_band",
            "predicted_resonances", "simulate_sweep", "DEFAULT_PROCESS_FORCE"]
 
-HZ = 1.0 / (2.0 * math.pi)
 #: Force [N peak to peak] of the standing regime when the process force is unknown.
 DEFAULT_PROCESS_FORCE = 600.0
 #: Force levels relative to the process force: smaller, process, larger.
@@ -178,7 +178,7 @@ def predicted_resonances(omega, h) -> list[tuple[float, float]]:
         zeta = 0.02
         if mag[lo] <= half and mag[hi] <= half and lo < i < hi:
             zeta = max(0.5 * (omega[hi] - omega[lo]) / omega[i], 0.003)
-        out.append((float(omega[i] * HZ), float(min(zeta, 0.3))))
+        out.append((float(omega[i] * HZ_PER_RAD_S), float(min(zeta, 0.3))))
     return out
 
 
@@ -199,7 +199,7 @@ def _wp_modes_hz(axis, band) -> list[float]:
         try:
             model = axis.configuration(pads=pads, motor="free")
             share = model.participation("wp.x")
-            f = model.natural_frequencies() * HZ
+            f = model.natural_frequencies() * HZ_PER_RAD_S
         except (ValueError, KeyError):
             continue
         out += [float(x) for x, s in zip(f, share, strict=True)
@@ -250,7 +250,7 @@ def simulate_sweep(axis: NonlinearAxis, force_pp: float, band_hz, resonances, sp
     at_edge = bool(f_peak <= band_hz[0] * (1 + EDGE) or f_peak >= band_hz[1] / (1 + EDGE))
     keep = np.unique(np.linspace(0, env.frequency.size - 1, min(env.frequency.size, 600))
                      .astype(int))
-    envelope = (env.frequency[keep] * HZ, env.amplitude[keep])
+    envelope = (env.frequency[keep] * HZ_PER_RAD_S, env.amplitude[keep])
     return Simulation(**tags, kind="sweep", force_pp=force_pp, speed=speed,
                       band_hz=tuple(band_hz), peak=float(env.peak), resonance_hz=float(f_peak),
                       envelope=envelope,
@@ -385,7 +385,7 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         regimes = chosen
     before_ok = result.before.stable and simulate_before
     omega = 2 * math.pi * np.geomspace(0.5, 2500.0, 6000)
-    modes = _wp_modes_hz(axis, np.array(req.band) * HZ)
+    modes = _wp_modes_hz(axis, np.array(req.band) * HZ_PER_RAD_S)
     torque_limit = None
     if problem.drive is not None and problem.drive.limits is not None:
         torque_limit = problem.drive.limits.torque_peak
@@ -398,7 +398,7 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         res = _regime_resonances(problem, [result.initial if result.before.stable else None,
                                            result.design], name, omega)
         band = tuple(band_hz) if band_hz is not None else sweep_band(
-            np.array(req.band) * HZ, [f for f, _ in res], modes)
+            np.array(req.band) * HZ_PER_RAD_S, [f for f, _ in res], modes)
         levels = (forces if forces is not None else
                   [process * k for k in (FORCE_LEVELS if speed == 0 else FEEDING_LEVELS)])
         regime_info[name] = (speed, claim, claim_before, models, band)

@@ -4,9 +4,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from pathlib import Path  # noqa: E402
+from pathlib import Path
 
-import pytest  # noqa: E402
+import pytest
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from axis_fixtures import PADS, small_axis, small_drive
 
+from servotune.axis import load_axis
 from servotune.cli import main
+from servotune.drive import Sampling
 from servotune.friction import LuGreParameters
 from servotune.simulate import table3 as t3
-from servotune.axis import load_axis
-from servotune.drive import Sampling
 from servotune.simulate.setup import AxisSetup, axis_setup
-from servotune.simulate.verify import design_setup, verify_design
+from servotune.simulate.verify import verify_design
 
 P = LuGreParameters.named("bianchi2014")
 SHORT = t3.SweepSettings(40.0, 150.0, 3.0, (0.5, 3.0))   # the small axis resonates at 78-113 Hz

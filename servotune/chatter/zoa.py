@@ -63,6 +63,7 @@ import control
 import numpy as np
 from scipy import optimize
 
+from ..units import HZ_PER_RAD_S
 from .frf import _as_matrix, compliance_matrix, frequency_grid, system_response
 from .setup import MillingSetup, directional_matrix
 
@@ -81,7 +82,6 @@ __all__ = [
 MAX_LOBES = 5000
 #: lobe points handled at once when the envelope is formed (bounds the memory to ~ 0.3 GB)
 _POINTS_PER_CHUNK = 4_000_000
-HZ_PER_RAD_S = 1.0 / (2.0 * math.pi)
 
 
 def _check_setup(setup) -> MillingSetup:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..units import HZ_PER_RAD_S
 from ._common import (
     RunOutput,
     add_common_options,
@@ -18,7 +19,6 @@ from ._common import (
 __all__ = ["add_parser", "run"]
 
 FIG9_C = (5e3, 5e4, 5e5, 5e6, 5e7)  # the paper's Fig 9 [N s/m]
-HZ = 1.0 / (2.0 * 3.141592653589793)
 
 
 def add_parser(subparsers) -> None:
@@ -70,7 +70,7 @@ def run(args) -> int:
     out = {"axis": axis.name, "contact": contact.kind, "contact_note": contact.note,
            "controlled": controlled, "notes": notes,
            "peak_compliance": main.peak_compliance,
-           "peak_frequency_hz": main.peak_frequency * HZ,
+           "peak_frequency_hz": main.peak_frequency * HZ_PER_RAD_S,
            "peak_at_edge": main.at_edge,
            "curves": [c.to_dict() for c in curves],
            "fig9": [dict(c.to_dict(), c=cv) for c, cv in zip(fig9_curves, FIG9_C, strict=False)],
@@ -84,7 +84,7 @@ def run(args) -> int:
                 title=f"{axis.name}: work-piece X compliance"
                       + (" (closed loop)" if controlled else " (no control)"),
                 marks=[(f"{main.peak_compliance:.3g} m/N at "
-                        f"{main.peak_frequency * HZ:.1f} Hz",
+                        f"{main.peak_frequency * HZ_PER_RAD_S:.1f} Hz",
                         main.peak_frequency, main.peak_compliance)]), folder / names[0])
         if names and fig9:
             save_figure(plot_compliance(
@@ -100,12 +100,13 @@ def run(args) -> int:
         print(f"  note: {note}")
     for c in curves:
         print(f"  {c.label:55} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * HZ:.2f} Hz"
-              + (f"  AT THE BAND EDGE ({c.band[0] * HZ:g}-{c.band[1] * HZ:g} Hz): the largest "
+              f"{c.peak_frequency * HZ_PER_RAD_S:.2f} Hz"
+              + (f"  AT THE BAND EDGE ({c.band[0] * HZ_PER_RAD_S:g}-"
+                 f"{c.band[1] * HZ_PER_RAD_S:g} Hz): the largest "
                  "value there, not a resonance; widen [requirements] band_hz to find the peak"
                  if c.at_edge else ""))
     for c in fig9_curves:
         print(f"  no control, {c.label:43} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * HZ:.2f} Hz")
+              f"{c.peak_frequency * HZ_PER_RAD_S:.2f} Hz")
     print(f"  wrote {run.path}")
     return 0

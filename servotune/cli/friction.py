@@ -23,7 +23,6 @@ from ._common import (
 
 __all__ = ["add_parser", "run", "run_fit", "PARAMETER_SETS"]
 
-HZ = 1.0 / (2.0 * math.pi)
 TABLE_AMPLITUDES = (1e-6, 2e-6, 5e-6)  # the amplitudes the paper's discussion is about [m]
 # LuGreParameters.names(), listed here so that the parser needs no numerics (tests check it)
 PARAMETER_SETS = ("bianchi2014", "canudas1995")

@@ -6,6 +6,7 @@ import argparse
 import warnings
 from pathlib import Path
 
+from ..units import HZ_PER_RAD_S
 from ._common import (
     COUNT,
     CliError,
@@ -29,7 +30,6 @@ SETUP_FLAGS = {"teeth": "--teeth", "kt": "--kt", "kn": "--kn", "immersion": "--i
                "milling": "--milling"}
 DEFAULT_INTERVALS = None  # servotune.chatter.sdm.DEFAULT_INTERVALS (tests check they agree)
 
-HZ = 1.0 / (2.0 * 3.141592653589793)
 MM = 1e-3
 
 _TEETH = number(1, 100, integer=True, example=4)
@@ -250,7 +250,7 @@ def run(args) -> int:
     print(f"  b_crit              : {result.b_crit / MM:.4f} mm")
     print(f"  critical speed      : {result.critical_speed_rpm:.1f} rpm")
     if args.method == "zoa":
-        print(f"  chatter frequency   : {result.critical_frequency * HZ:.1f} Hz")
+        print(f"  chatter frequency   : {result.critical_frequency * HZ_PER_RAD_S:.1f} Hz")
     else:
         print(f"  zero-order b_crit   : {zoa.b_crit / MM:.4f} mm "
               f"at {zoa.critical_speed_rpm:.1f} rpm")

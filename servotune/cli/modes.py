@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import sys
 
+from ..units import HZ_PER_RAD_S
 from ._common import (
     COUNT,
     RunOutput,
@@ -28,7 +29,6 @@ from ._common import (
 
 __all__ = ["add_parser", "run"]
 
-HZ = 1.0 / (2.0 * math.pi)
 WP_X = "wp.x"
 
 
@@ -76,17 +76,17 @@ def run(args) -> int:
     peak = None
     if rigid == 0:
         w_peak, value = model.compliance_peak(WP_X, band[0], band[1])
-        peak = {"wp_x_peak_compliance": value, "wp_x_peak_hz": w_peak * HZ}
+        peak = {"wp_x_peak_compliance": value, "wp_x_peak_hz": w_peak * HZ_PER_RAD_S}
     result = {
         "axis": axis.name, "pads": args.pads, "motor": args.motor, "n_dofs": model.n,
-        "frequencies_hz": (omega * HZ).tolist(),
+        "frequencies_hz": (omega * HZ_PER_RAD_S).tolist(),
         "damping_ratios": [None if math.isnan(z) else float(z) for z in zeta],
         "wp_x_participation": share.tolist(),
-        "wp_x_mode": j + 1, "wp_x_mode_hz": float(omega[j] * HZ),
+        "wp_x_mode": j + 1, "wp_x_mode_hz": float(omega[j] * HZ_PER_RAD_S),
         "rigid_body_modes": rigid,
         "wp_x_peak_compliance": None if peak is None else peak["wp_x_peak_compliance"],
         "wp_x_peak_hz": None if peak is None else peak["wp_x_peak_hz"],
-        "band_hz": [band[0] * HZ, band[1] * HZ],
+        "band_hz": [band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S],
         "notes": default_notes(axis),
         "folder": str(out.path),
         "band_coverage": coverage.to_dict(),
@@ -104,11 +104,12 @@ def run(args) -> int:
     for i in range(min(count, len(omega))):
         z = "      -" if math.isnan(zeta[i]) else f"{100 * zeta[i]:7.2f}"
         mark = "  <- work piece X" if i == j else ""
-        print(f"  {i + 1:4d} {omega[i] * HZ:9.2f}  {z}   {100 * share[i]:10.2f}{mark}")
-    print(f"  work-piece X mode: {omega[j] * HZ:.2f} Hz ({100 * share[j]:.1f} % of the static "
+        print(f"  {i + 1:4d} {omega[i] * HZ_PER_RAD_S:9.2f}  {z}   {100 * share[i]:10.2f}{mark}")
+    print(f"  work-piece X mode: {omega[j] * HZ_PER_RAD_S:.2f} Hz "
+          f"({100 * share[j]:.1f} % of the static "
           "compliance at wp.x)")
     if peak is not None:
-        lo, hi = band[0] * HZ, band[1] * HZ
+        lo, hi = band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S
         print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
               f"{peak['wp_x_peak_hz']:.2f} Hz ({lo:g}-{hi:g} Hz)")
     for note in result["notes"]:

@@ -13,7 +13,6 @@ from ._common import (
 
 __all__ = ["add_parser", "run"]
 
-HZ = 1.0 / (2.0 * 3.141592653589793)
 FIGURES = ("fig5_compliance.png", "fig4_g_alpha.png")
 
 _MASS = number(0.0, 1e9, low_open=True, example=5000, unit="kg")

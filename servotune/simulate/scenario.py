@@ -28,7 +28,6 @@ __all__ = ["Scenario", "sine_sweep", "constant_speed", "point_to_point", "sinuso
            "custom", "sweep_phase", "sweep_frequency", "SweepPlan", "sweep_plan",
            "planned_sweep"]
 
-HZ = 1.0 / (2.0 * math.pi)
 DEFAULT_START = 0.2   # [s] smooth start to a constant speed
 
 

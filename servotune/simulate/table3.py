@@ -28,6 +28,7 @@ import numpy as np
 from ..frequency import peak, port_compliance
 from ..friction.lugre import steady_state_friction
 from ..plant import Contact
+from ..units import HZ_PER_RAD_S
 from .contact import LuGreFriction, ViscousFriction
 from .scenario import sine_sweep
 from .setup import AxisSetup
@@ -36,7 +37,6 @@ from .simulator import DEFAULT_STEP, DEFAULT_TOLERANCE, NonlinearAxis, simulate
 __all__ = ["Trial", "SweepSettings", "PAPER_TABLE3", "TRIALS", "run_trial", "table3",
            "linear_references", "check_remarks", "Table3"]
 
-HZ = 1.0 / (2.0 * math.pi)
 
 
 @dataclass(frozen=True)
@@ -135,7 +135,7 @@ def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
                          ("viscous", Contact.viscous(setup.viscous))):
         h = port_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
         mag, w = peak(omega, h)
-        out[key] = {"resonance_hz": w * HZ, "compliance_m_per_n": mag}
+        out[key] = {"resonance_hz": w * HZ_PER_RAD_S, "compliance_m_per_n": mag}
     return out
 
 

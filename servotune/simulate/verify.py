@@ -31,6 +31,7 @@ from ..drive import PIController
 from ..frequency import peak, port_compliance
 from ..friction.equivalent import describing_function
 from ..plant import Contact
+from ..units import HZ_PER_RAD_S
 from .contact import LuGreFriction
 from .scenario import sine_sweep
 from .setup import AxisSetup
@@ -38,7 +39,6 @@ from .simulator import NonlinearAxis, simulate
 
 __all__ = ["design_setup", "verify_design", "DEFAULT_FORCES"]
 
-HZ = 1.0 / (2.0 * math.pi)
 DEFAULT_FORCES = (50.0, 600.0, 2000.0)
 
 
@@ -47,7 +47,7 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
     """The axis set-up with a design's values: LuGre sigma2 = C (and the viscous-only C), the
     drive's Kv and velocity PI (values left None keep the axis')."""
     for name, value in (("c", c), ("kv", kv), ("kp", kp), ("ti", ti)):
-        if value is not None and not (math.isfinite(value) and value > 0 or
+        if value is not None and not ((math.isfinite(value) and value > 0) or
                                       (name == "ti" and value == math.inf)):
             raise ValueError(f"design {name} must be a positive number, got {value!r}")
     drive = setup.drive
@@ -77,7 +77,7 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
     def predict(contact):
         h = port_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
         mag, w = peak(omega, h)
-        return {"resonance_hz": w * HZ, "peak_m_per_n": mag}
+        return {"resonance_hz": w * HZ_PER_RAD_S, "peak_m_per_n": mag}
 
     p = setup.lugre
     linear = {"locked": predict(Contact.locked()),

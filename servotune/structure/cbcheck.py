@@ -10,19 +10,18 @@ T. P. Widrick, pyYeti, ``pyyeti.cb.cbcheck`` (checks of Craig-Bampton models).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
 import scipy.sparse
 
+from ..units import RAD_S_PER_HZ
 from .model import ModalModel
 from .ports import normalise_direction
 
 __all__ = ["CraigBamptonCheck", "cb_check", "rigid_body_vectors"]
 
-_TWO_PI = 2.0 * math.pi
 _TRANSLATIONS = {"x": 0, "y": 1, "z": 2}
 _ROTATIONS = {"rx": 0, "ry": 1, "rz": 2}
 #: a ratio below this is taken as a negative eigenvalue of K (round-off allowance)
@@ -272,12 +271,12 @@ def cb_check(model, stiffness=None, dofs=None, *, coordinates=None, rigid_body=N
     m_min, k_min = _relative_min_eig(m), _relative_min_eig(k)
     if m_min > 0:
         w2 = scipy.linalg.eigvalsh(k, m)
-        free = np.sqrt(np.clip(w2, 0, None)) / _TWO_PI
+        free = np.sqrt(np.clip(w2, 0, None)) / RAD_S_PER_HZ
     else:
         free = np.zeros(0)
     if q.size and m_min > 0:
         w2 = scipy.linalg.eigvalsh(k[np.ix_(q, q)], m[np.ix_(q, q)])
-        fixed = np.sqrt(np.clip(w2, 0, None)) / _TWO_PI
+        fixed = np.sqrt(np.clip(w2, 0, None)) / RAD_S_PER_HZ
     else:
         fixed = np.zeros(0)
 

@@ -21,12 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..units import RAD_S_PER_HZ
 from .model import ModalModel
 
 __all__ = ["DEFAULT_MARGIN", "BandCoverage", "fixed_interface_frequencies", "mode_coverage"]
 
 DEFAULT_MARGIN = 1.5
-_TWO_PI = 2.0 * math.pi
 
 
 def _finite(x):
@@ -92,7 +92,7 @@ def fixed_interface_frequencies(model: ModalModel) -> np.ndarray:
         return np.zeros(0)
     sub = np.ix_(q, q)
     w2 = np.linalg.eigvals(np.linalg.solve(model.mass[sub], model.stiffness[sub])).real
-    return np.sort(np.sqrt(np.clip(w2, 0.0, None))) / _TWO_PI
+    return np.sort(np.sqrt(np.clip(w2, 0.0, None))) / RAD_S_PER_HZ
 
 
 def mode_coverage(model: ModalModel, band, margin: float = DEFAULT_MARGIN) -> BandCoverage:
@@ -131,7 +131,7 @@ def mode_coverage(model: ModalModel, band, margin: float = DEFAULT_MARGIN) -> Ba
     margin = float(margin)
     if not (math.isfinite(margin) and margin >= 1.0):
         raise ValueError(f"margin must be a number >= 1, got {margin!r}")
-    band_hz = (lo / _TWO_PI, hi / _TWO_PI)
+    band_hz = (lo / RAD_S_PER_HZ, hi / RAD_S_PER_HZ)
     required = margin * band_hz[1]
     f = fixed_interface_frequencies(model)
     info = model.reduction

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse
 
+from ..units import RAD_S_PER_HZ
 from .cbcheck import CraigBamptonCheck, cb_check, rigid_body_vectors
 from .model import ModalModel, ReductionInfo
 from .solvers import SOLVERS, factorise, lowest_modes, pardiso_available
@@ -58,7 +59,6 @@ __all__ = [
     "rigid_body_vectors",
 ]
 
-_TWO_PI = 2.0 * math.pi
 _pardiso_available = pardiso_available  # former private name, kept for scripts that use it
 
 
@@ -148,9 +148,9 @@ class CraigBamptonBasis:
     def info(self) -> ReductionInfo:
         """What the kept fixed-interface modes cover, for :class:`ModalModel`."""
         return ReductionInfo(n_full=self.n_full, n_boundary=self.boundary.size,
-                             fixed_interface_hz=tuple(self.omega / _TWO_PI),
-                             next_hz=self.next_omega / _TWO_PI,
-                             complete_below_hz=self.complete_below / _TWO_PI,
+                             fixed_interface_hz=tuple(self.omega / RAD_S_PER_HZ),
+                             next_hz=self.next_omega / RAD_S_PER_HZ,
+                             complete_below_hz=self.complete_below / RAD_S_PER_HZ,
                              method=self.method, restarts=self.restarts)
 
     def expand(self, reduced) -> np.ndarray:
@@ -182,7 +182,7 @@ def _fixed_interface_modes(k_ii, m_ii, factor, n_modes, f_max_hz, verify):
         modes = lowest_modes(k_ii, m_ii, count=n_modes, factor=factor, verify=verify,
                              name="K_ii", release_factor=True)
     else:
-        modes = lowest_modes(k_ii, m_ii, below=(_TWO_PI * f_max_hz) ** 2, factor=factor,
+        modes = lowest_modes(k_ii, m_ii, below=(RAD_S_PER_HZ * f_max_hz) ** 2, factor=factor,
                              verify=verify, name="K_ii")
     w2, phi = modes.eigenvalues, modes.vectors
     if np.any(w2 <= 0):
@@ -190,12 +190,12 @@ def _fixed_interface_modes(k_ii, m_ii, factor, n_modes, f_max_hz, verify):
                          "(check the signs of the stiffness export)")
     if w2.size and w2[0] < 1e-12 * max(w2[-1], modes.next_eigenvalue if
                                        math.isfinite(modes.next_eigenvalue) else 0.0):
-        f0 = math.sqrt(w2[0]) / _TWO_PI
+        f0 = math.sqrt(w2[0]) / RAD_S_PER_HZ
         raise ValueError(_MECHANISM + f" (a fixed-interface mode at {f0:.3g} Hz, nearly zero)")
     method = modes.method
     complete = modes.complete_below
     if f_max_hz is not None and method != "lanczos-unchecked":
-        complete = max(complete, (_TWO_PI * f_max_hz) ** 2)
+        complete = max(complete, (RAD_S_PER_HZ * f_max_hz) ** 2)
     nxt = modes.next_eigenvalue
     return (np.sqrt(w2), phi, math.sqrt(nxt) if nxt >= 0 else nxt,
             math.sqrt(complete) if complete >= 0 else complete, method, modes.restarts)

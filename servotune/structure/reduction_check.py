@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse
 
+from ..units import RAD_S_PER_HZ
 from .cbcheck import rigid_body_vectors
 from .coverage import DEFAULT_MARGIN, BandCoverage, mode_coverage
 from .model import ModalModel
@@ -63,7 +64,6 @@ from .solvers import factorise, lowest_modes
 
 __all__ = ["COMPLIANCE_FLOOR", "ReductionCheck", "reduction_check"]
 
-_TWO_PI = 2.0 * math.pi
 #: Peaks below this share of a port's largest compliance in the band are not compared.
 COMPLIANCE_FLOOR = 0.01
 #: Terms of the series in (w^2 - sigma) for the remainder of the full model's modes left out.
@@ -338,15 +338,15 @@ def reduction_check(mass, stiffness, boundary, reduced: ModalModel, band, *,
     omega_f = np.sqrt(np.clip(lam_f, 0.0, None))
     rigid_tol = 1e-4 * hi
     in_band = omega_f <= hi
-    full_hz = omega_f[in_band] / _TWO_PI
+    full_hz = omega_f[in_band] / RAD_S_PER_HZ
     omega_r = reduced.natural_frequencies()
     phi_r = reduced.mode_shapes()[:b.size]
-    reduced_hz = omega_r[:full_hz.size] / _TWO_PI
+    reduced_hz = omega_r[:full_hz.size] / RAD_S_PER_HZ
     n_missing = int(full_hz.size - reduced_hz.size)
     rigid_full = int(np.sum(omega_f < rigid_tol))
     rigid_red = int(np.sum(omega_r < rigid_tol))
     pairs = min(full_hz.size, reduced_hz.size)
-    flexible = full_hz[:pairs] > rigid_tol / _TWO_PI
+    flexible = full_hz[:pairs] > rigid_tol / RAD_S_PER_HZ
     errors = reduced_hz[:pairs][flexible] / full_hz[:pairs][flexible] - 1.0
 
     # compliance at the ports, both with structural damping eta = 2 zeta: the peaks near
@@ -406,7 +406,7 @@ def reduction_check(mass, stiffness, boundary, reduced: ModalModel, band, *,
     if not coverage.covered:
         failures.append(coverage.message)
     if n_missing > 0:
-        failures.append(f"the full model has {full_hz.size} modes up to {hi / _TWO_PI:g} Hz, "
+        failures.append(f"the full model has {full_hz.size} modes up to {hi / RAD_S_PER_HZ:g} Hz, "
                         f"the reduced model only {reduced_hz.size}: add boundary DOFs or "
                         "fixed-interface modes")
     if rigid_full != rigid_red:

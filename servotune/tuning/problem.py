@@ -15,7 +15,6 @@ __all__ = ["VARIABLES", "ChatterTarget", "Design", "NoStableStartError",
            "RequirementsNotMetError", "TuningDidNotConvergeError", "TuningProblem"]
 
 VARIABLES = ("c", "kv", "kp", "ti")
-HZ = 1.0 / (2.0 * math.pi)
 
 
 class RequirementsNotMetError(ValueError):

@@ -36,6 +36,7 @@ import numpy as np
 from .. import frequency
 from ..drive import current_loop_bandwidth
 from ..plant import UnstableLoopError, build_plant
+from ..units import HZ_PER_RAD_S
 from .nlp import Kernels, Solution, Solver, gate_parameters
 from .ports import ResponseModel, grid, port_data
 from .problem import (
@@ -49,7 +50,6 @@ from .verify import Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = ["TuningResult", "StartSet", "stable_starts", "model_stability", "tune"]
 
-HZ = 1.0 / (2.0 * math.pi)
 #: Softer velocity loops tried when the initial design leaves a model unstable.
 SOFTENING = (0.7, 0.5, 0.35, 0.25, 0.18, 0.125, 0.09)
 #: Points of the fine grids on which the exchange looks for the worst frequencies (each found
@@ -467,7 +467,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
                    "models": len(problem.regimes),
                    "return_status": runs[-1].stats["return_status"] if runs else None,
                    "current_loop_bandwidth_hz": None if current_bw is None
-                   else current_bw * HZ,
+                   else current_bw * HZ_PER_RAD_S,
                    "time_s": time.perf_counter() - t_start})
     solver = full
 
@@ -534,7 +534,8 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
                "grid_points": int(grids.band.size + grids.loop.size),
                "models": len(problem.regimes),
                "return_status": best.stats["return_status"],
-               "current_loop_bandwidth_hz": None if current_bw is None else current_bw * HZ,
+               "current_loop_bandwidth_hz": (None if current_bw is None
+                                             else current_bw * HZ_PER_RAD_S),
                "time_s": time.perf_counter() - t_start})
 
 

@@ -19,12 +19,12 @@ from .. import frequency
 from ..plant import UnstableLoopError, build_plant, loop_transfer
 from ..regimes import RegimeModel
 from ..structure.model import signal_name
+from ..units import HZ_PER_RAD_S
 from .problem import Design, TuningProblem
 
 __all__ = ["ModelPerformance", "Performance", "RequirementCheck", "verify",
            "requirement_checks", "CHECK_TOLERANCE"]
 
-HZ = 1.0 / (2.0 * math.pi)
 #: Relative slack of the dense check on a requirement the optimiser imposed exactly (the grid
 #: exchange converges to this order; the gates of the hierarchy constraints are soft by a few
 #: percent, see :mod:`servotune.tuning.nlp`).
@@ -48,7 +48,7 @@ class ModelPerformance:
         return {**self.model.to_dict(), "stable": self.stable, "reason": self.reason or None,
                 "peak_compliance": self.peak_compliance,
                 "peak_frequency_hz": None if self.peak_frequency is None
-                else self.peak_frequency * HZ,
+                else self.peak_frequency * HZ_PER_RAD_S,
                 "b_crit_m": self.b_crit,
                 "velocity_loop": self.velocity.to_dict() if self.velocity else None,
                 "position_loop": self.position.to_dict() if self.position else None}
@@ -110,7 +110,7 @@ class Performance:
 
     def to_dict(self) -> dict:
         return {"peak_compliance": self.peak_compliance,
-                "peak_frequency_hz": self.peak_frequency * HZ,
+                "peak_frequency_hz": self.peak_frequency * HZ_PER_RAD_S,
                 "b_crit_m": self.b_crit, "stable": self.stable,
                 "reference_model": self.models[self.reference].model.name,
                 "velocity_loop": self.velocity.to_dict() if self.velocity else None,
@@ -214,8 +214,10 @@ def requirement_checks(problem: TuningProblem, design: Design, performance: Perf
             out.append(RequirementCheck(
                 "loop hierarchy", name, ratio, req.bandwidth_ratio_min,
                 bool(ratio >= req.bandwidth_ratio_min * slack),
-                f"{name}: velocity-loop bandwidth {bw_v * HZ:.3g} Hz is {ratio:.3g} times the "
-                f"position loop's {bw_p * HZ:.3g} Hz (at least {req.bandwidth_ratio_min:g})"))
+                f"{name}: velocity-loop bandwidth {bw_v * HZ_PER_RAD_S:.3g} Hz is {ratio:.3g} "
+                f"times the "
+                f"position loop's {bw_p * HZ_PER_RAD_S:.3g} Hz "
+                f"(at least {req.bandwidth_ratio_min:g})"))
         ti = design.ti
         if ti is not None and math.isfinite(bw_v) and (req.ti_bandwidth_min
                                                        or req.ti_bandwidth_max):
@@ -226,7 +228,7 @@ def requirement_checks(problem: TuningProblem, design: Design, performance: Perf
                 "Ti and velocity bandwidth", name, value,
                 req.ti_bandwidth_min if not lo_ok else (req.ti_bandwidth_max or None),
                 bool(lo_ok and hi_ok),
-                f"{name}: Ti times the velocity-loop bandwidth ({bw_v * HZ:.3g} Hz) is "
+                f"{name}: Ti times the velocity-loop bandwidth ({bw_v * HZ_PER_RAD_S:.3g} Hz) is "
                 f"{value:.3g} (within [{req.ti_bandwidth_min:g}, "
                 f"{req.ti_bandwidth_max or math.inf:g}])"))
         if req.current_bandwidth_ratio_min > 0 and current_bandwidth is not None:
@@ -234,7 +236,8 @@ def requirement_checks(problem: TuningProblem, design: Design, performance: Perf
             out.append(RequirementCheck(
                 "current loop above", name, ratio, req.current_bandwidth_ratio_min,
                 bool(ratio >= req.current_bandwidth_ratio_min * slack),
-                f"{name}: current-loop bandwidth {current_bandwidth * HZ:.3g} Hz is {ratio:.3g} "
+                f"{name}: current-loop bandwidth {current_bandwidth * HZ_PER_RAD_S:.3g} Hz "
+                f"is {ratio:.3g} "
                 f"times the velocity loop's (at least {req.current_bandwidth_ratio_min:g})"))
     if problem.thrust is not None:
         for case in problem.thrust.cases(design.c):
