@@ -61,6 +61,7 @@ class CuttingForce:
     force: np.ndarray
 
     def to_dict(self) -> dict:
+        """Return the scalar results as a JSON-ready dictionary (SI; forces in N)."""
         return {"direction": self.direction, "depth": self.depth,
                 "feed_per_tooth": self.feed_per_tooth, "mean_n": self.mean,
                 "peak_to_peak_n": self.peak_to_peak, "first_harmonic_n": self.first_harmonic}
@@ -73,17 +74,26 @@ def cutting_force(setup: MillingSetup, depth: float, feed_per_tooth: float,
     Parameters
     ----------
     setup : MillingSetup
+        The milling set-up (teeth, cutting coefficients, immersion).
     depth : float
         Axial depth of cut b [m].
     feed_per_tooth : float
         Feed per tooth f_z [m], in the x (feed) direction.
     direction : {"x", "y"}
+        Direction of the force component: "x" the feed direction, "y" normal to it.
     samples : int
         Intervals of the tooth period (the force is averaged over each, exactly).
 
     Returns
     -------
     CuttingForce
+        The force over the period [N] and its mean, peak-to-peak and first harmonic.
+
+    Raises
+    ------
+    ValueError
+        When ``direction`` is not "x" or "y", or ``depth`` or ``feed_per_tooth`` is not a
+        positive finite number [m].
 
     Examples
     --------

@@ -94,7 +94,24 @@ class Mode:
     @classmethod
     def from_hz(cls, f_hz: float, damping_ratio: float, stiffness: float,
                 direction: str = "x") -> Mode:
-        """A mode given by its natural frequency in Hz (the command line's form)."""
+        """Return a mode given by its natural frequency in Hz (the command line's form).
+
+        Parameters
+        ----------
+        f_hz : float
+            Natural frequency [Hz].
+        damping_ratio : float
+            Modal damping ratio [-].
+        stiffness : float
+            Modal stiffness [N/m].
+        direction : {"x", "y"}, optional
+            Direction the mode acts in (default "x").
+
+        Returns
+        -------
+        Mode
+            The mode with natural frequency ``2 pi f_hz`` [rad/s].
+        """
         return cls(2.0 * math.pi * float(f_hz), damping_ratio, stiffness, direction)
 
     @property
@@ -111,11 +128,17 @@ def modal_compliance(modes) -> control.StateSpace:
     Parameters
     ----------
     modes : iterable of Mode
+        The modes, each acting in its own direction (x or y) with its own stiffness.
 
     Returns
     -------
     control.StateSpace
         2 x 2, inputs named ``fx, fy`` and outputs ``x, y``.
+
+    Raises
+    ------
+    ValueError
+        When no mode is given, or an item is not a :class:`Mode`.
 
     Examples
     --------
@@ -165,6 +188,25 @@ def frequency_grid(system, omega_max: float | None = None, points: int = 1500) -
     ``w_n (1 + zeta t)``, t in [-10, 30], around each lightly damped pole, where the real part
     of the compliance has its negative lobe (width ~ zeta w_n).
 
+    Parameters
+    ----------
+    system : control.LTI
+        python-control system (state space or transfer function) whose poles are resolved.
+    omega_max : float, optional
+        Upper end of the grid [rad/s] when above five times the highest natural frequency.
+    points : int, optional
+        Points of the logarithmic base grid (default 1500).
+
+    Returns
+    -------
+    numpy.ndarray
+        Strictly increasing frequencies [rad/s], shape (n,).
+
+    Raises
+    ------
+    ValueError
+        When the system has no pole away from zero.
+
     Examples
     --------
     >>> from servotune.chatter import Mode, modal_compliance
@@ -196,6 +238,18 @@ def system_response(system, omega) -> np.ndarray:
     A state-space system with a well-conditioned eigenvector basis is evaluated as a sum of
     first-order terms, ``C V diag(1 / (i w - lambda)) V^-1 B + D``, which costs O(n) per
     frequency; anything else goes through python-control.
+
+    Parameters
+    ----------
+    system : control.LTI
+        python-control system with p outputs and m inputs.
+    omega : array_like
+        Angular frequencies [rad/s], shape (nfreq,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex response, shape (p, m, nfreq).
     """
     omega = np.asarray(omega, dtype=float)
     if isinstance(system, control.StateSpace) and system.nstates > 0:

@@ -168,6 +168,11 @@ def cutting_state_space(system, direction: str = "x") -> CuttingStateSpace:
     direction : {"x", "y"}
         Flexible direction of a SISO system.
 
+    Returns
+    -------
+    CuttingStateSpace
+        The balanced (a, b, c) of the flexible directions and the highest significant mode.
+
     Raises
     ------
     ValueError
@@ -219,7 +224,7 @@ def _highest_significant_mode(a, b, c) -> float:
 
 
 def choose_intervals(model: CuttingStateSpace, period) -> np.ndarray:
-    """Intervals per tooth period for the semi-discretisation at each tooth period [s].
+    """Return the intervals per tooth period for the semi-discretisation at each tooth period.
 
     ``m >= max(MIN_INTERVALS, INTERVALS_PER_MODE_PERIOD T f)`` with f = ``model.mode_frequency``
     / 2 pi, the highest significant mode, rounded up on a ladder of steps of sqrt 2 from
@@ -227,6 +232,18 @@ def choose_intervals(model: CuttingStateSpace, period) -> np.ndarray:
     interpolates the delayed displacement linearly over T/m; its error in b_lim was measured
     to fall as K (T f / m)^2 with K up to 6.2 (benchmarks/README.md), which this keeps below
     1 %; :func:`sdm_lobes` checks it and refines further where the convergence is slower.
+
+    Parameters
+    ----------
+    model : CuttingStateSpace
+        The compliance; its ``mode_frequency`` [rad/s] sets the resolution needed.
+    period : array_like
+        Tooth periods T [s].
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Intervals m per tooth period, shape of ``period``.
 
     Examples
     --------
@@ -260,6 +277,7 @@ def monodromy_spectral_radius(model: CuttingStateSpace, h, period, depth,
     Parameters
     ----------
     model : CuttingStateSpace
+        The compliance in state-space form (:func:`cutting_state_space`).
     h : array_like, shape (m, r, r) or (m, 2, 2)
         Mean directional matrix of each of the m intervals of one period [N/m^2] (a constant
         stack gives the time-invariant, zero-order process). 2 x 2 matrices are reduced to the
@@ -458,6 +476,7 @@ def stability_map(system, setup: MillingSetup, speeds_rpm, depths, *,
     system : control.StateSpace or control.TransferFunction
         Tool/work-piece compliance (see :func:`cutting_state_space`).
     setup : MillingSetup
+        The milling set-up (teeth, cutting coefficients, immersion).
     speeds_rpm : array_like
         Ascending spindle speeds [rpm].
     depths : array_like
@@ -472,6 +491,7 @@ def stability_map(system, setup: MillingSetup, speeds_rpm, depths, *,
     Returns
     -------
     StabilityMap
+        The spectral radius (and the critical multiplier) at every (depth, speed) point.
 
     Examples
     --------
@@ -550,6 +570,7 @@ class SdmLobes(StabilityLobes):
     max_error_estimate: float = math.nan
 
     def to_dict(self) -> dict:
+        """Return :meth:`StabilityLobes.to_dict` with the intervals and error estimates by speed."""
         out = super().to_dict()
         out["intervals_by_speed"] = (None if self.intervals_by_speed is None
                                      else np.asarray(self.intervals_by_speed).tolist())
@@ -600,7 +621,7 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
 
     Parameters
     ----------
-    system, setup, direction
+    system, setup
         As for :func:`stability_map`.
     speeds_rpm : array_like, optional
         Ascending spindle speeds [rpm]; default 200 speeds over
@@ -611,6 +632,8 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     intervals : int, optional
         Intervals per tooth period (>= 2) at every speed, without the check; default
         automatic, as above.
+    direction : {"x", "y"}
+        Flexible direction of a SISO compliance.
     scan : int
         Depth steps of the initial scan (an unstable island thinner than depth_max/scan
         below the first boundary could be missed).
@@ -624,6 +647,18 @@ def sdm_lobes(system, setup: MillingSetup, speeds_rpm=None, depth_max: float | N
     SdmLobes
         ``method="sdm"``; ``chatter_frequency`` is NaN (not computed); the intervals and the
         error estimate at each speed.
+
+    Raises
+    ------
+    ValueError
+        For a compliance the method cannot use (see :func:`cutting_state_space`), bad speeds,
+        depths, intervals, or the reasons of :class:`MillingSetup`.
+
+    See Also
+    --------
+    servotune.chatter.zoa.stability_lobes : The zero-order lobes, faster and smooth.
+    stability_map : The spectral radius over a grid of speeds and depths.
+    servotune.frequency.compliance : The work-piece compliance of the controlled axis.
 
     Examples
     --------

@@ -158,6 +158,31 @@ class MillingSetup:
                    milling: str = "down", helix_angle: float = 0.0) -> MillingSetup:
         """Build a set-up from Altintas' radial force *ratio* K_r = K_n / K_t (dimensionless).
 
+        Parameters
+        ----------
+        teeth : int
+            Number of teeth N.
+        kt : float
+            Tangential cutting coefficient K_t [N/m^2].
+        kr : float
+            Radial force ratio K_r = K_n / K_t [-], >= 0.
+        radial_immersion : float, optional
+            Radial depth over tool diameter a/D (default 1, a full slot).
+        milling : {"down", "up"}, optional
+            Milling mode (default "down").
+        helix_angle : float, optional
+            Helix angle [rad] (default 0).
+
+        Returns
+        -------
+        MillingSetup
+            The set-up with ``kn = kr * kt``.
+
+        Raises
+        ------
+        ValueError
+            When ``kr`` is negative or not finite, or for the reasons of :class:`MillingSetup`.
+
         Examples
         --------
         >>> MillingSetup.from_ratio(teeth=4, kt=2e9, kr=0.3).kn
@@ -246,6 +271,23 @@ def directional_factor(setup: MillingSetup, direction: str = "x") -> float:
     With only direction d flexible, the zero-order limit is ``b_lim = -1 / (2 K_t mu_d Re G_dd)``
     (Tlusty's form with K_s = K_t). mu_d may be negative for some engagements (then chatter
     needs Re G_dd > 0, i.e. frequencies below the resonance).
+
+    Parameters
+    ----------
+    setup : MillingSetup
+        The milling set-up.
+    direction : {"x", "y"}, optional
+        The flexible direction d (default "x").
+
+    Returns
+    -------
+    float
+        mu_d [-].
+
+    Raises
+    ------
+    ValueError
+        When ``direction`` is neither "x" nor "y".
     """
     i = _direction_index(direction)
     return float(directional_matrix(setup)[i, i] / setup.kt)
@@ -266,10 +308,22 @@ def periodic_directional_matrix(setup: MillingSetup, intervals: int) -> np.ndarr
     angles), so a tooth entering or leaving the cut inside an interval is weighted correctly.
     They do not depend on the spindle speed: in one tooth period every tooth turns 2 pi / N.
 
+    Parameters
+    ----------
+    setup : MillingSetup
+        The milling set-up.
+    intervals : int
+        Number m of equal intervals of the tooth period, >= 1.
+
     Returns
     -------
     numpy.ndarray
         Shape ``(intervals, 2, 2)``; its mean over the intervals is :func:`directional_matrix`.
+
+    Raises
+    ------
+    ValueError
+        When ``intervals`` is not a whole number >= 1.
 
     Examples
     --------

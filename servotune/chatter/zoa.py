@@ -98,12 +98,18 @@ def oriented_frf(g, setup: MillingSetup) -> np.ndarray:
     g : array_like of complex, shape (nfreq, 2, 2)
         The compliance matrix (as returned by :func:`compliance_matrix`).
     setup : MillingSetup
+        The milling set-up: its directional matrix D and tangential coefficient K_t.
 
     Returns
     -------
     numpy.ndarray of complex, shape (nfreq, 2)
         The two eigenvalues at each frequency, each column following one continuous branch
         (the pairing with the previous frequency that moves least).
+
+    Raises
+    ------
+    ValueError
+        When ``g`` is not of shape (nfreq, 2, 2), or ``setup`` is not a MillingSetup.
 
     Examples
     --------
@@ -212,15 +218,38 @@ def _oriented_at(system, direction, setup, w: float) -> np.ndarray:
 
 def absolute_stability_limit(system, setup: MillingSetup, omega=None,
                              direction: str = "x") -> tuple[float, float]:
-    """b_crit [m] and the chatter frequency there [rad/s], by Eq (3) of the module docstring.
+    """Return b_crit [m] and the chatter frequency there [rad/s], by Eq (3) of the module docstring.
 
     For a python-control system the minimum of Re Phi found on the grid is refined by a bounded
     scalar search on the system itself; for measured data by a parabola through the grid
     minimum.
 
+    Parameters
+    ----------
+    system : control.StateSpace, control.TransferFunction, control.FrequencyResponseData or \
+tuple (omega, H)
+        The tool/work-piece compliance [m/N], 2 x 2 (x, y) or SISO
+        (see :func:`compliance_matrix`).
+    setup : MillingSetup
+        The milling set-up.
+    omega : array_like, optional
+        Frequency grid [rad/s] for a python-control system (default: :func:`frequency_grid`).
+    direction : {"x", "y"}, optional
+        Flexible direction of a SISO compliance (default "x").
+
     Returns
     -------
-    (b_crit, omega_c) : tuple of float
+    b_crit : float
+        The absolute stability limit, the axial depth of cut [m] below which the cut is stable
+        at every spindle speed.
+    omega_c : float
+        The chatter frequency at b_crit [rad/s].
+
+    Raises
+    ------
+    ValueError
+        For bad input (see :func:`compliance_matrix`, :class:`MillingSetup`) or an oriented
+        FRF with no negative real part (no chatter limit).
 
     Examples
     --------
@@ -323,7 +352,23 @@ class StabilityLobes:
     intervals: int = 0
 
     def margin(self, required_depth: float) -> float:
-        """The smallest b_lim in the speed range over a required depth [m] (> 1: stable)."""
+        """Return the smallest b_lim in the speed range over a required depth (> 1: stable).
+
+        Parameters
+        ----------
+        required_depth : float
+            Axial depth of cut the process needs [m], positive.
+
+        Returns
+        -------
+        float
+            ``min_depth_limit / required_depth`` [-].
+
+        Raises
+        ------
+        ValueError
+            When ``required_depth`` is not a positive finite number.
+        """
         return self.min_depth_limit / _check_depth(required_depth)
 
     def to_dict(self) -> dict:
@@ -424,6 +469,7 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
         The tool/work-piece compliance [m/N], 2 x 2 (x, y) or SISO
         (see :func:`compliance_matrix`).
     setup : MillingSetup
+        The milling set-up (teeth, cutting coefficients, immersion).
     speeds_rpm : array_like, optional
         Ascending spindle speeds [rpm] at which to give b_lim. Default: 2000 speeds from 0.8
         times the 10th lobe minimum to 1.5 times the first.
@@ -439,6 +485,7 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
     Returns
     -------
     StabilityLobes
+        b_lim at each speed, b_crit, the critical speed and frequency, and the lobes traced.
 
     Raises
     ------
@@ -446,6 +493,13 @@ def stability_lobes(system, setup: MillingSetup, speeds_rpm=None, *, omega=None,
         For bad input (see :func:`compliance_matrix`, :class:`MillingSetup`), an oriented FRF
         with no negative real part, or a speed range so low that more than
         ``MAX_LOBES`` lobes would be needed.
+
+    See Also
+    --------
+    sdm_lobes : The same lobes by semi-discretisation (flip lobes of low immersion).
+    chatter_margin : b_crit or the least b_lim in a speed window over a required depth.
+    servotune.frequency.compliance : The work-piece compliance of the controlled axis.
+    servotune.analysis.compliance_curve : The same for an axis description.
 
     Notes
     -----
@@ -545,6 +599,27 @@ def default_speed_range(system, setup: MillingSetup, *, omega=None,
 
     From 0.8 times the speed of the 10th lobe minimum (k = 9) to 1.5 times the first (k = 0).
 
+    Parameters
+    ----------
+    system : control.LTI or tuple (omega, H)
+        The tool/work-piece compliance [m/N], as for :func:`stability_lobes`.
+    setup : MillingSetup
+        The milling set-up.
+    omega : array_like, optional
+        Frequency grid [rad/s] for a python-control system.
+    direction : {"x", "y"}, optional
+        Flexible direction of a SISO compliance (default "x").
+
+    Returns
+    -------
+    low, high : float
+        The speed range [rpm].
+
+    Raises
+    ------
+    ValueError
+        As for :func:`absolute_stability_limit`.
+
     Examples
     --------
     >>> from servotune.chatter import Mode, modal_compliance
@@ -563,8 +638,27 @@ def default_speed_range(system, setup: MillingSetup, *, omega=None,
 
 def spindle_speeds(system, setup: MillingSetup, speed_range_rpm=None, count: int = 2000, *,
                    omega=None, direction: str = "x") -> np.ndarray:
-    """``count`` equally spaced spindle speeds [rpm] over a range, by default
-    :func:`default_speed_range`.
+    """Return equally spaced spindle speeds [rpm] over a range, by default the lobes' range.
+
+    Parameters
+    ----------
+    system : control.LTI or tuple (omega, H)
+        The tool/work-piece compliance [m/N], used only when ``speed_range_rpm`` is None.
+    setup : MillingSetup
+        The milling set-up, used only when ``speed_range_rpm`` is None.
+    speed_range_rpm : (float, float), optional
+        Lowest and highest speed [rpm]; default :func:`default_speed_range`.
+    count : int, optional
+        Number of speeds, at least 2 (default 2000).
+    omega : array_like, optional
+        Frequency grid [rad/s], passed to :func:`default_speed_range`.
+    direction : {"x", "y"}, optional
+        Flexible direction of a SISO compliance (default "x").
+
+    Returns
+    -------
+    numpy.ndarray
+        ``count`` ascending speeds [rpm].
 
     Raises
     ------
@@ -589,7 +683,7 @@ def chatter_margin(system, setup: MillingSetup, required_depth: float, speed_ran
 
     Parameters
     ----------
-    system, setup, omega, direction
+    system, setup
         As for :func:`stability_lobes`.
     required_depth : float
         The axial depth of cut the process needs [m].
@@ -597,10 +691,19 @@ def chatter_margin(system, setup: MillingSetup, required_depth: float, speed_ran
         A spindle-speed window. Without it the margin is ``b_crit / required_depth`` (stable at
         every speed); with it, ``min b_lim / required_depth`` over the window (stable
         somewhere in it at the least favourable speed).
+    omega, direction
+        As for :func:`stability_lobes`.
 
     Returns
     -------
     float
+        The margin [-]; above 1 the required depth is stable.
+
+    Raises
+    ------
+    ValueError
+        When ``required_depth`` is not positive and finite, the window not ``0 < low < high``,
+        or for the reasons of :func:`stability_lobes`.
 
     Examples
     --------
