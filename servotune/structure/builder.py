@@ -95,7 +95,21 @@ class StructureBuilder:
         self._dofs[name] = len(self._dofs)
 
     def add_node(self, name: str, position) -> None:
-        """A node with six DOFs ``name.x`` ... ``name.rz`` at ``position`` (x, y, z) [m]."""
+        """Add a node with six DOFs ``name.x`` ... ``name.rz`` at ``position``.
+
+        Parameters
+        ----------
+        name : str
+            Node name; its DOFs are ``name.x``, ``name.y``, ``name.z`` [m] and ``name.rx``,
+            ``name.ry``, ``name.rz`` [rad].
+        position : array_like
+            Position (x, y, z) [m].
+
+        Raises
+        ------
+        ValueError
+            When the position is not 3 finite numbers, or the node or one of its DOFs exists.
+        """
         p = np.asarray(position, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise ValueError(f"position of node {name!r} must be 3 finite numbers")
@@ -119,24 +133,43 @@ class StructureBuilder:
     def add_beam(self, node1: str, node2: str, *, e: float, area: float, iy: float, iz: float,
                  torsion: float, rho: float, g: float | None = None, n_elements: int = 1,
                  up=(0.0, 0.0, 1.0), nu: float = 0.3) -> list[str]:
-        """A straight beam between two nodes, split into ``n_elements`` elements.
+        """Add a straight beam between two nodes, split into ``n_elements`` elements.
 
         Parameters
         ----------
-        e, g : float
-            Young's and shear modulus [Pa] (g defaults to e / (2 (1 + nu))).
+        node1, node2 : str
+            The end nodes (added before with :meth:`add_node`).
+        e : float
+            Young's modulus [Pa], > 0.
         area, iy, iz, torsion : float
-            Cross-section area [m^2], second moments about the local y and z axes and the
-            torsion constant [m^4]. Local x runs from node1 to node2, local y is
+            Cross-section area [m^2] (> 0), second moments about the local y and z axes and the
+            torsion constant [m^4] (>= 0). Local x runs from node1 to node2, local y is
             ``up x x`` (normalised), local z = x x y.
         rho : float
             Density [kg/m^3] (consistent mass; rotary inertia of the section in torsion).
+        g : float, optional
+            Shear modulus [Pa]; default e / (2 (1 + nu)).
+        n_elements : int, optional
+            Number of elements (default 1); the n_elements - 1 intermediate nodes are added.
+        up : array_like, optional
+            Direction (x, y, z) that fixes the local y axis (default z; y when the beam runs
+            along ``up``).
+        nu : float, optional
+            Poisson's ratio for the default ``g`` (default 0.3).
 
         Returns
         -------
         list of str
             All node names along the beam, node1 first (intermediate nodes are named
             ``<node1>-<node2>.<i>``).
+
+        Raises
+        ------
+        ValueError
+            When a section or material value is negative or not finite (e and area also when
+            zero), or the beam has zero length.
+        KeyError
+            When an end node does not exist.
         """
         for name, v in (("e", e), ("area", area), ("iy", iy), ("iz", iz), ("torsion", torsion),
                         ("rho", rho), ("nu", nu)):
@@ -170,8 +203,23 @@ class StructureBuilder:
         return names
 
     def add_mass(self, dof_or_node: str, mass: float, inertia=None) -> None:
-        """A point mass [kg] on a scalar DOF, or on a node's translations with an optional
-        rotary inertia (Jxx, Jyy, Jzz) [kg m^2] on its rotations."""
+        """Add a point mass on a scalar DOF, or on a node's translations.
+
+        Parameters
+        ----------
+        dof_or_node : str
+            A DOF name (the mass goes on that DOF alone) or a node name (on its x, y, z).
+        mass : float
+            The mass [kg] (for a rotation DOF its inertia [kg m^2]), >= 0.
+        inertia : array_like, optional
+            Rotary inertia (Jxx, Jyy, Jzz) [kg m^2] on a node's rotations.
+
+        Raises
+        ------
+        ValueError
+            When the mass or an inertia is negative or not finite, ``inertia`` is given for a
+            DOF rather than a node, or the DOF is unknown.
+        """
         if not np.isfinite(mass) or mass < 0:
             raise ValueError(f"mass at {dof_or_node!r} must be >= 0, got {mass!r}")
         if dof_or_node in self._nodes:
@@ -192,6 +240,18 @@ class StructureBuilder:
         ``terms`` maps DOF names to coefficients c_i. ``{"a.x": 1}`` is a spring to ground,
         ``{"a.x": 1, "b.x": -1}`` a spring between two DOFs, and
         ``{"nut.x": 1, "screw.x": -1, "screw.rx": -p}`` a ball-screw nut of lead 2 pi p.
+
+        Parameters
+        ----------
+        terms : dict
+            DOF name -> coefficient c_i [-] (for a rotation DOF, the lever [m]).
+        stiffness : float
+            Spring stiffness k [N/m], >= 0.
+
+        Raises
+        ------
+        ValueError
+            When the stiffness is negative or not finite, or a DOF is unknown.
         """
         if not np.isfinite(stiffness) or stiffness < 0:
             raise ValueError(f"spring stiffness must be >= 0, got {stiffness!r}")
@@ -201,10 +261,30 @@ class StructureBuilder:
 
     def add_rigid_link(self, master: str, slave: str, stiffness: float,
                        rotational_stiffness: float | None = None) -> None:
-        """A stiff connection making node ``slave`` follow node ``master`` as a rigid offset:
-        three penalty springs of ``stiffness`` [N/m] on the translations and three of
-        ``rotational_stiffness`` [N m/rad] (default ``stiffness`` times 1 m^2) on the
-        rotations; used to attach a point (a pad, an encoder head) to a beam node."""
+        """Add a stiff connection making node ``slave`` follow node ``master`` as a rigid offset.
+
+        Three penalty springs of ``stiffness`` on the translations and three of
+        ``rotational_stiffness`` on the rotations; used to attach a point (a pad, an encoder
+        head) to a beam node.
+
+        Parameters
+        ----------
+        master : str
+            The node followed.
+        slave : str
+            The node that follows, at its offset from ``master``.
+        stiffness : float
+            Penalty stiffness of the translations [N/m].
+        rotational_stiffness : float, optional
+            Penalty stiffness of the rotations [N m/rad]; default ``stiffness`` times 1 m^2.
+
+        Raises
+        ------
+        KeyError
+            When a node does not exist.
+        ValueError
+            When a stiffness is negative or not finite.
+        """
         krot = stiffness if rotational_stiffness is None else rotational_stiffness
         r = self._nodes[slave] - self._nodes[master]
         for axis, comp in enumerate(("x", "y", "z")):

@@ -29,8 +29,7 @@ STIFFNESS_RATIO_TOLERANCE = 1e-9
 
 
 def rigid_body_vectors(dofs, coordinates, reference=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """Geometric rigid-body motions of named DOFs: an (n, 6) array, columns X, Y, Z
-    translation and rotation about X, Y, Z through ``reference``.
+    """Return the geometric rigid-body motions of named DOFs.
 
     A DOF named ``<node>.<x|y|z|rx|ry|rz>`` whose node is in ``coordinates`` (a mapping
     node -> (x, y, z) [m]) moves as a point of a rigid body: a translation t and a small
@@ -38,6 +37,26 @@ def rigid_body_vectors(dofs, coordinates, reference=(0.0, 0.0, 0.0)) -> np.ndarr
     be spelt as an FE export does (``ux``, ``rotz``, Nastran components ``1``-``6``; see
     :func:`~servotune.structure.ports.normalise_direction`). Any other DOF (modal
     coordinates, relative or drive DOFs) gets a zero row.
+
+    Parameters
+    ----------
+    dofs : sequence of str
+        DOF names, ``<node>.<direction>``.
+    coordinates : mapping
+        Node name -> position (x, y, z) [m].
+    reference : array_like, optional
+        Point (x, y, z) [m] the rotations are taken about (default the origin).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n, 6): columns the translations along X, Y, Z [m/m] and the rotations about
+        X, Y, Z through ``reference`` [m/rad for translation DOFs, rad/rad for rotation DOFs].
+
+    Raises
+    ------
+    ValueError
+        When ``reference`` or a node's coordinates are not 3 finite numbers.
 
     Examples
     --------

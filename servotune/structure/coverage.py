@@ -82,9 +82,12 @@ class BandCoverage:
 
 
 def fixed_interface_frequencies(model: ModalModel) -> np.ndarray:
-    """Frequencies [Hz] of the fixed-interface modes of a reduced model: from its reduction
-    information when it has it, else from its modal DOFs ``mode.*`` (eigenvalues of their
-    block of K and M, which for a Craig-Bampton model are diag(omega^2) and I)."""
+    """Return the frequencies [Hz] of the fixed-interface modes of a reduced model.
+
+    From its reduction information when it has it, else from its modal DOFs ``mode.*``
+    (eigenvalues of their block of K and M, which for a Craig-Bampton model are diag(omega^2)
+    and I); empty when it has neither.
+    """
     if model.reduction is not None:
         return np.array(model.reduction.fixed_interface_hz)
     q = [i for i, d in enumerate(model.dofs) if d.startswith("mode.")]

@@ -440,6 +440,12 @@ def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffn
     port_tolerance : float
         Largest distance [m] between a port's position and its node.
 
+    Returns
+    -------
+    StructureMatrices
+        The checked matrices (sparse CSR, symmetric) with the DOF names (ports renamed) and
+        the source.
+
     Raises
     ------
     MatrixFileError
@@ -503,8 +509,34 @@ def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffn
 
 
 def write_npz(path, mass, stiffness, dofs, force: bool = False) -> Path:
-    """Write mass, stiffness and DOF names to ``.npz`` (dense arrays stay dense, sparse ones are
-    stored as CSR parts); never overwrites an existing file unless ``force``."""
+    """Write mass, stiffness and DOF names to ``.npz``.
+
+    Dense arrays stay dense, sparse ones are stored as CSR parts; the file is written to a
+    temporary name and renamed, and an existing file is never overwritten unless ``force``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, ending in ``.npz``; missing parent folders are created.
+    mass, stiffness : (n, n) sparse matrix or array_like
+        The matrices [kg, N/m, ...].
+    dofs : sequence of str
+        The n DOF names.
+    force : bool, optional
+        Overwrite an existing file (default False).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    ValueError
+        When the name does not end in ``.npz`` or a matrix is not n x n.
+    FileExistsError
+        When the file exists and ``force`` is False.
+    """
     path = Path(path)
     if path.suffix.lower() != ".npz":
         raise ValueError(f"{path}: the file name must end in .npz")

@@ -49,9 +49,23 @@ class UnknownDofError(KeyError, ValueError):
 
 
 def signal_name(dof: str, prefix: str = "") -> str:
-    """The python-control signal name of a DOF (python-control reserves '.' for
-    ``subsystem.signal``): ``signal_name("wp.x")`` is ``"wp_x"``, with ``prefix="f_"`` it is
-    ``"f_wp_x"``."""
+    """Return the python-control signal name of a DOF.
+
+    python-control reserves '.' for ``subsystem.signal``: ``signal_name("wp.x")`` is
+    ``"wp_x"``, with ``prefix="f_"`` it is ``"f_wp_x"``.
+
+    Parameters
+    ----------
+    dof : str
+        DOF name.
+    prefix : str, optional
+        Prefix of the signal (``"f_"`` for a force input, ``"v_"`` for a velocity output).
+
+    Returns
+    -------
+    str
+        The prefix and the DOF name with every '.' replaced by '_'.
+    """
     return prefix + dof.replace(".", "_")
 
 
@@ -297,9 +311,33 @@ class ModalModel:
                           reduction=self.reduction)
 
     def with_added(self, stiffness=None, damping=None) -> ModalModel:
-        """The model with extra physical stiffness and/or damping (e.g. contact springs and
-        dampers at the pads), given as (n, n) matrices or as ``{dof: value}`` for grounded
-        elements on single DOFs."""
+        """Return the model with extra physical stiffness and/or damping.
+
+        For example the contact springs and dampers at the pads.
+
+        Parameters
+        ----------
+        stiffness : array_like or dict, optional
+            Added stiffness [N/m]: an (n, n) symmetric matrix, or ``{dof: k}`` for grounded
+            springs on single DOFs (each finite and >= 0).
+        damping : array_like or dict, optional
+            Added viscous damping [N s/m], in the same two forms.
+
+        Returns
+        -------
+        ModalModel
+            The same mass, the stiffness and damping with the additions (the damping is then
+            physical, no longer modal); its :meth:`port_receptance` goes through this model's
+            when the additions touch at most a quarter of the DOFs.
+
+        Raises
+        ------
+        ValueError
+            When a grounded value is negative or not finite, or a matrix is not a symmetric,
+            finite (n, n) matrix.
+        UnknownDofError
+            When a DOF of a dict is not in the model.
+        """
         k = self.stiffness.copy()
         d = self.damping.copy()
         for target, extra in ((k, stiffness), (d, damping)):
@@ -334,6 +372,28 @@ class ModalModel:
         velocities of ``velocity_outputs``. Both default to all DOFs that are not modal.
         Signal names follow :func:`signal_name`: for DOF ``wp.x`` the force input is ``f_wp_x``,
         the displacement output ``wp_x`` and the velocity output ``v_wp_x``.
+
+        Parameters
+        ----------
+        inputs : sequence of str, optional
+            DOFs the force inputs [N] act on (default: the DOFs that are not ``mode.*``, or
+            all when every DOF is modal).
+        outputs : sequence of str, optional
+            DOFs whose displacements [m] are outputs (same default).
+        velocity_outputs : sequence of str, optional
+            DOFs whose velocities [m/s] are further outputs (default none).
+        name : str, optional
+            Name of the system (default "structure"); states ``x_<dof>`` then ``v_<dof>``.
+
+        Returns
+        -------
+        control.StateSpace
+            2 n states, the named inputs and outputs, D = 0.
+
+        Raises
+        ------
+        UnknownDofError
+            When a DOF is not in the model.
 
         Examples
         --------
@@ -372,7 +432,28 @@ class ModalModel:
         :meth:`port_receptance` gives the same from the modes at a cost linear in the number
         of modes, the way to go for models of more than a few dozen DOFs).
 
-        Returns an array of shape (len(omega), len(outputs), len(inputs)) [m/N, ...].
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies [rad/s].
+        inputs : sequence of str
+            DOFs the unit forces act on.
+        outputs : sequence of str
+            DOFs whose displacements are returned.
+
+        Returns
+        -------
+        numpy.ndarray of complex
+            Shape (len(omega), len(outputs), len(inputs)) [m/N, or rad/(N m) and the mixed
+            units for rotation DOFs].
+
+        Raises
+        ------
+        UnknownDofError
+            When a DOF is not in the model.
+        numpy.linalg.LinAlgError
+            When the dynamic stiffness is singular at a frequency (omega = 0 with rigid-body
+            modes).
         """
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
         i_in, i_out = self.index(list(inputs)), self.index(list(outputs))
@@ -397,10 +478,32 @@ class ModalModel:
         return self._ports["modal_d"]
 
     def port_receptance(self, omega, inputs, outputs) -> np.ndarray:
-        """Receptance X/F(j omega) between named DOFs through the modes and the ports: a cost
-        linear in the number of modes per frequency.
+        """Return the receptance X/F(j omega) between named DOFs through the modes and the ports.
 
-        Same result and shape as :meth:`receptance`, (len(omega), len(outputs), len(inputs)).
+        The cost per frequency is linear in the number of modes.
+
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies [rad/s].
+        inputs : sequence of str
+            DOFs the unit forces act on.
+        outputs : sequence of str
+            DOFs whose displacements are returned.
+
+        Returns
+        -------
+        numpy.ndarray of complex
+            Same result and shape as :meth:`receptance`, (len(omega), len(outputs),
+            len(inputs)).
+
+        Raises
+        ------
+        UnknownDofError
+            When a DOF is not in the model.
+        ValueError
+            At omega = 0 for a model with modal damping and rigid-body modes (the receptance
+            is infinite).
 
         Notes
         -----
@@ -489,9 +592,34 @@ class ModalModel:
 
     def compliance_peak(self, dof: str, omega_min: float, omega_max: float,
                         n: int = 2000) -> tuple[float, float]:
-        """Largest driving-point receptance magnitude |X/F| at a DOF in [omega_min, omega_max]
-        [rad/s]: ``(omega_peak, peak)`` from a logarithmic grid of ``n`` points refined by a
-        bounded scalar search around the best point."""
+        """Return the largest driving-point receptance magnitude |X/F| at a DOF in a band.
+
+        From a logarithmic grid of ``n`` points refined by a bounded scalar search around the
+        best point.
+
+        Parameters
+        ----------
+        dof : str
+            The DOF (force and displacement).
+        omega_min, omega_max : float
+            The band [rad/s], ``0 < omega_min < omega_max``.
+        n : int, optional
+            Points of the logarithmic grid (default 2000).
+
+        Returns
+        -------
+        omega_peak : float
+            Frequency of the peak [rad/s].
+        peak : float
+            The peak |X/F| [m/N].
+
+        Raises
+        ------
+        ValueError
+            When the band is not ``0 < omega_min < omega_max``.
+        UnknownDofError
+            When the DOF is not in the model.
+        """
         from scipy.optimize import minimize_scalar
 
         if not 0 < omega_min < omega_max:

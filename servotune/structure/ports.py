@@ -129,8 +129,27 @@ class Port:
 
 
 def read_ports(path) -> tuple[Port, ...]:
-    """Ports from a CSV file: columns ``port``, ``direction`` and either ``node`` or ``x``,
-    ``y``, ``z`` (a row may leave ``node`` empty and give the position instead)."""
+    """Read ports from a CSV file.
+
+    The columns are ``port``, ``direction`` and either ``node`` or ``x``, ``y``, ``z`` (a row
+    may leave ``node`` empty and give the position instead).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    tuple of Port
+        One port per row, in file order.
+
+    Raises
+    ------
+    PortError
+        When the file cannot be read, is empty, lacks a column, or a row has neither a node
+        nor a position or names a bad port or direction (the message names file and line).
+    """
     path = Path(path)
     try:
         with open(path, newline="") as handle:

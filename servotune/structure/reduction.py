@@ -203,11 +203,36 @@ def _fixed_interface_modes(k_ii, m_ii, factor, n_modes, f_max_hz, verify):
 
 def craig_bampton_basis(mass, stiffness, boundary, n_modes=None, f_max_hz=None,
                         solver: str = "auto", verify: str = "auto") -> CraigBamptonBasis:
-    """The Craig-Bampton transformation and reduced matrices of a (sparse) FE model.
+    """Return the Craig-Bampton transformation and reduced matrices of a (sparse) FE model.
 
-    Parameters are those of :func:`craig_bampton` (without names and damping); use this
-    function when the constraint and fixed-interface modes are wanted (e.g. to recover
-    interior displacements with :meth:`CraigBamptonBasis.expand`).
+    Use this function when the constraint and fixed-interface modes are wanted (e.g. to
+    recover interior displacements with :meth:`CraigBamptonBasis.expand`).
+
+    Parameters
+    ----------
+    mass, stiffness : (n, n) sparse matrix or array_like
+        Symmetric FE matrices [kg, N/m, ...], as for :func:`craig_bampton`.
+    boundary : sequence of int or (n,) bool array
+        Indices (0-based) of the boundary DOFs, kept in this order.
+    n_modes : int, optional
+        Number of fixed-interface modes to keep.
+    f_max_hz : float, optional
+        Keep every fixed-interface mode up to this frequency [Hz] instead (exactly one of
+        ``n_modes`` and ``f_max_hz``).
+    solver : {"auto", "superlu", "pardiso"}
+        Sparse factorisation of K_ii, as for :func:`craig_bampton`.
+    verify : {"auto", "sturm", "deflation", "none"}
+        Check of the eigen-solution for missed modes, as for :func:`craig_bampton`.
+
+    Returns
+    -------
+    CraigBamptonBasis
+        The transformation (constraint and fixed-interface modes) and the reduced matrices.
+
+    Raises
+    ------
+    ValueError
+        For the reasons of :func:`craig_bampton`, and an unknown ``solver``.
     """
     m = _as_sparse("mass", mass)
     k = _as_sparse("stiffness", stiffness)
@@ -306,6 +331,13 @@ def craig_bampton(mass, stiffness, boundary, n_modes=None, f_max_hz=None, dampin
     ValueError
         Mismatched or non-square matrices, bad boundary indices, both or neither of
         ``n_modes``/``f_max_hz``, or a singular K_ii (the structure moves with the boundary held).
+
+    See Also
+    --------
+    craig_bampton_basis : The transformation itself, to recover interior displacements.
+    servotune.structure.cbcheck.cb_check : Checks of the reduced model against the full one.
+    servotune.axis.load_axis : Reads an axis, reducing FE matrices by this function on loading.
+    servotune.frequency.compliance : The work-piece compliance of the axis built on the model.
 
     Notes
     -----

@@ -175,8 +175,7 @@ def _superlu(a):
 
 def factorise(a, solver: str = "auto", *, name: str = "K_ii", mechanism: str | None = None,
               lazy: bool = False):
-    """Factors of a sparse symmetric positive definite matrix, with ``solve(b)`` and
-    ``release()`` methods.
+    """Factorise a sparse symmetric positive definite matrix.
 
     Parameters
     ----------
@@ -192,10 +191,17 @@ def factorise(a, solver: str = "auto", *, name: str = "K_ii", mechanism: str | N
     lazy : bool
         Factorise at the first solve instead of now (then the errors come from there).
 
+    Returns
+    -------
+    object
+        The factors, with the methods ``solve(b)`` (K^-1 b for a vector or an (n, k) array)
+        and ``release()`` (frees the factors).
+
     Raises
     ------
     ValueError
-        A singular or indefinite matrix, with the message saying what that means.
+        A singular or indefinite matrix, with the message saying what that means (when
+        ``lazy``, at the first solve); an unknown ``solver``, or "pardiso" without pypardiso.
     """
     if solver not in SOLVERS:
         raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
@@ -215,6 +221,26 @@ def count_eigenvalues_below(k, m, value: float) -> int:
     The count of negative pivots of an LDL^T factorisation of K - value M (Sylvester's law of
     inertia); K symmetric positive semi-definite, M symmetric positive semi-definite. Dense
     eigenvalues for n <= 200.
+
+    Parameters
+    ----------
+    k : (n, n) sparse matrix or array_like
+        Stiffness K, symmetric positive semi-definite.
+    m : (n, n) sparse matrix or array_like
+        Mass M, symmetric positive semi-definite.
+    value : float
+        The shift lambda = omega^2 [rad^2/s^2].
+
+    Returns
+    -------
+    int
+        The number of eigenvalues below ``value``.
+
+    Raises
+    ------
+    ValueError
+        When SuperLU cannot factorise K - value M with diagonal pivots at six shifts near
+        ``value`` (n > 200 only).
 
     Examples
     --------
