@@ -63,10 +63,26 @@ def moving_mass(structure: ModalModel, pads, drive: Drive | None = None) -> floa
     ``phi^T M phi`` holds the slide, the work piece and the rotating parts through the
     transmission (a motor inertia J counts J/r^2).
 
+    Parameters
+    ----------
+    structure : ModalModel
+        The structure with its pads free (not grounded).
+    pads : sequence of str
+        The pad DOFs (relative X at each guide-way pad).
+    drive : Drive, optional
+        Not used: the rotating parts enter through the structure's mass matrix.
+
+    Returns
+    -------
+    float
+        The moving mass [kg].
+
     Raises
     ------
     ValueError
         When the structure has no rigid-body travel along the pads.
+    UnknownDofError
+        When a pad is not a DOF of the structure.
 
     Examples
     --------
@@ -105,6 +121,7 @@ class ThrustCase:
 
     @property
     def needed(self) -> float:
+        """Sum of the terms: the thrust the case needs [N]."""
         return float(sum(f for _, f in self.terms))
 
     @property
@@ -118,6 +135,7 @@ class ThrustCase:
         return self.needed / self.available
 
     def to_dict(self) -> dict:
+        """Return the case as a JSON-ready dictionary (forces in N, speed in m/s)."""
         return {"name": self.name, "speed_m_per_s": self.speed, "thrust": self.thrust_kind,
                 "available_n": self.available, "usable_n": self.usable,
                 "needed_n": self.needed, "fits": self.fits,
@@ -153,8 +171,24 @@ class ThrustBudget:
         return float(stribeck_curve(self.friction, v))
 
     def cases(self, c: float, extra_friction: float = 0.0) -> tuple[ThrustCase, ...]:
-        """The load cases with total viscous damping ``c`` [N s/m] and an added friction level
-        ``extra_friction`` [N] (a friction damper)."""
+        """Return the load cases with a total viscous damping and an added friction level.
+
+        One peak-thrust case at the rapid speed (friction, viscous force and acceleration),
+        one continuous case per feed speed (friction, viscous force and the feed force), and a
+        standing case against the feed force when there is no feed speed.
+
+        Parameters
+        ----------
+        c : float
+            Total viscous damping C [N s/m].
+        extra_friction : float, optional
+            Friction level of a friction damper [N], added to every moving case (default 0).
+
+        Returns
+        -------
+        tuple of ThrustCase
+            The cases, rapid traverse first.
+        """
         op, out = self.operation, []
         usable_peak = (1 - self.margin) * self.thrust_peak
         usable_cont = (1 - self.margin) * self.thrust_continuous
@@ -194,6 +228,19 @@ class ThrustBudget:
         return min(limits) if limits else math.inf
 
     def to_dict(self, c: float) -> dict:
+        """Return the budget at a damping as a JSON-ready dictionary.
+
+        Parameters
+        ----------
+        c : float
+            Total viscous damping C [N s/m] the cases are evaluated at.
+
+        Returns
+        -------
+        dict
+            Thrusts [N], margin, moving mass [kg], ``c_max`` [N s/m], whether all cases fit,
+            and the cases (:meth:`ThrustCase.to_dict`).
+        """
         cases = self.cases(c)
         return {"thrust_peak_n": self.thrust_peak, "thrust_continuous_n": self.thrust_continuous,
                 "margin": self.margin, "moving_mass_kg": self.mass,
@@ -204,7 +251,33 @@ class ThrustBudget:
 def thrust_budget(drive: Drive | None, friction: LuGreParameters | None,
                   operation: Operation | None, structure: ModalModel, pads,
                   margin: float) -> ThrustBudget | None:
-    """The budget of an axis, or None when the drive has no torque limits (or no operation)."""
+    """Return the thrust budget of an axis, or None when it cannot be drawn up.
+
+    Parameters
+    ----------
+    drive : Drive or None
+        The drive; its torque limits through the transmission give the thrusts.
+    friction : LuGreParameters or None
+        Axis-total guide-way friction.
+    operation : Operation or None
+        The regimes (feed speeds, rapid speed, acceleration, feed force).
+    structure : ModalModel
+        The structure, for the moving mass (:func:`moving_mass`).
+    pads : sequence of str
+        The pad DOFs.
+    margin : float
+        Fraction of the thrust kept in reserve [-].
+
+    Returns
+    -------
+    ThrustBudget or None
+        None when the drive, its torque limits, the friction or the operation is missing.
+
+    Raises
+    ------
+    ValueError
+        When the structure has no rigid-body travel along the pads (:func:`moving_mass`).
+    """
     if drive is None or drive.limits is None or friction is None or operation is None:
         return None
     return ThrustBudget(drive.thrust_peak, drive.thrust_continuous, float(margin),
@@ -228,6 +301,7 @@ class CRealisation:
     fits_thrust: bool | None = None      # the thrust budget alone (None: no torque limits)
 
     def to_dict(self) -> dict:
+        """Return the option as a JSON-ready dictionary of its fields (SI)."""
         return dataclasses.asdict(self)
 
 
@@ -244,8 +318,10 @@ def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
                    amplitude: float | None, frequency: float | None,
                    contact_stiffness: float | None,
                    operation: Operation | None = None) -> tuple[CRealisation, ...]:
-    """The options that would realise a total viscous damping ``c`` over the identified
-    ``sigma2`` [N s/m], with their cost and whether they fit.
+    """Return the options that would realise a total viscous damping over the guide ways' own.
+
+    Each option realises ``c`` over the identified ``sigma2`` [N s/m], with its cost and
+    whether it fits.
 
     An option fits when the thrust budget holds with it AND it gives the damping in every
     regime the design was tuned for: a friction damper damps only while the pads vibrate and
@@ -258,6 +334,10 @@ def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
     ----------
     budget : ThrustBudget, optional
         Without it the options are reported without a verdict on the thrust.
+    c : float
+        The total viscous damping C the design needs [N s/m].
+    sigma2 : float
+        The viscous damping the guide ways have [N s/m].
     amplitude, frequency : float, optional
         Pad vibration amplitude [m] and angular frequency [rad/s] at the process force (for the
         friction damper).
@@ -265,6 +345,12 @@ def c_realisations(budget: ThrustBudget | None, c: float, sigma2: float,
         Tangential stiffness of the friction damper's contact [N/m] (the guide ways' sigma0).
     operation : Operation, optional
         The regimes of the axis (default: the budget's).
+
+    Returns
+    -------
+    tuple of CRealisation
+        "none" alone when ``c <= sigma2``; else a viscous element, and a friction damper when
+        ``amplitude``, ``frequency`` and ``contact_stiffness`` are given.
     """
     dc = float(c) - float(sigma2)
     op = operation if operation is not None else (

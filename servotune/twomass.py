@@ -145,6 +145,7 @@ def two_mass_compliance(system: TwoMassSystem, omega, c) -> np.ndarray:
     Parameters
     ----------
     system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
     omega : array_like
         Angular frequencies [rad/s], >= 0.
     c : array_like
@@ -227,6 +228,22 @@ def optimal_damping(system: TwoMassSystem) -> float:
     """Closed-form optimal viscous damping Copt [N s/m] (paper, Eq 4).
 
     Copt puts a horizontal tangent on |x2/f2| at the (second) fixed point.
+
+    Parameters
+    ----------
+    system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
+
+    Returns
+    -------
+    float
+        Copt [N s/m].
+
+    See Also
+    --------
+    minimax_damping : The same optimum found numerically, without the closed form.
+    analyse_two_mass : Fixed points, Copt, the optimal peak and the limit resonances.
+    servotune.design.tune_axis : Tunes the damping C of a full axis, checked against Copt.
 
     Notes
     -----
@@ -326,6 +343,7 @@ def peak_compliance(system: TwoMassSystem, c: float, omega_min: float | None = N
     Parameters
     ----------
     system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
     c : float
         Viscous damping [N s/m].
     omega_min, omega_max : float, optional
@@ -336,6 +354,11 @@ def peak_compliance(system: TwoMassSystem, c: float, omega_min: float | None = N
     -------
     (peak, omega_peak) : tuple of float
         Peak compliance [m/N] and where it occurs [rad/s].
+
+    Raises
+    ------
+    ValueError
+        When the band is not ``0 <= omega_min < omega_max`` or ``c`` is negative.
 
     Notes
     -----
@@ -369,6 +392,8 @@ def minimax_damping(system: TwoMassSystem, c_bounds: tuple[float, float] | None 
 
     Parameters
     ----------
+    system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
     c_bounds : (float, float), optional
         Search interval [N s/m]; default two decades either side of sqrt(K M1).
 
@@ -379,6 +404,8 @@ def minimax_damping(system: TwoMassSystem, c_bounds: tuple[float, float] | None 
 
     Raises
     ------
+    ValueError
+        If ``c_bounds`` is not ``0 < low < high``.
     RuntimeError
         If the minimum lies on a bound of the search interval.
     """
@@ -450,7 +477,26 @@ class TwoMassAnalysis:
         }
 
     def plot(self, kind: str = "compliance", **kwargs):
-        """Draw the paper's Fig 5 (``"compliance"``) or Fig 4 (``"g_alpha"``) for this system."""
+        """Draw the paper's Fig 5 (``"compliance"``) or Fig 4 (``"g_alpha"``) for this system.
+
+        Parameters
+        ----------
+        kind : {"compliance", "g_alpha"}, optional
+            The figure (default "compliance").
+        **kwargs
+            Passed to :func:`servotune.plots.plot_two_mass_compliance` or
+            :func:`servotune.plots.plot_g_alpha`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ValueError
+            For another ``kind``.
+        """
         from . import plots
 
         if kind == "compliance":
