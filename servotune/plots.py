@@ -44,6 +44,11 @@ def plot_g_alpha(alpha_max: float = 1.0, mark: float | None = None) -> Figure:
         Upper end of the alpha axis (the paper plots (0, 1]).
     mark : float, optional
         An alpha to mark on the curve (e.g. the system being analysed).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     alpha = np.linspace(alpha_max / 200.0, alpha_max, 400)
     fig = Figure(figsize=(6.0, 4.0), layout="constrained")
@@ -70,10 +75,16 @@ def plot_two_mass_compliance(analysis: twomass.TwoMassAnalysis, f_max_hz: float 
     Parameters
     ----------
     analysis : TwoMassAnalysis
+        From :func:`servotune.twomass.analyse_two_mass`: the system, Copt, the fixed points.
     f_max_hz : float
         Upper end of the frequency axis [Hz].
     decades : int
         How many decades of C either side of Copt.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     system = analysis.system
     f_hz = np.linspace(0.05, f_max_hz, 2000)
@@ -122,10 +133,18 @@ def plot_stribeck(params, v=None, force=None, v_max: float | None = None,
     Parameters
     ----------
     params : servotune.friction.LuGreParameters
+        The LuGre parameters whose steady-state curve is drawn.
     v, force : array_like, optional
         Measured velocities [m/s] and friction forces [N].
     v_max : float, optional
         Half-width of the velocity axis [m/s]; default the data's, or 0.5 m/s (Fig 7).
+    title : str, optional
+        First line of the title (the parameters follow on the second).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     from .friction import lugre
 
@@ -177,6 +196,11 @@ def plot_hysteresis(cycle, params=None) -> Figure:
     params : servotune.friction.LuGreParameters, optional
         If given, the paper's idealised stiction cycle (Fig 6: spring sigma0 up to +-Fs, then
         sliding) is drawn dashed for the same amplitudes.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     amplitude = np.atleast_1d(cycle.amplitude)
     x = np.atleast_2d(cycle.displacement)
@@ -211,12 +235,18 @@ def plot_equivalent_damping(params, omega: float, amplitude=None,
     Parameters
     ----------
     params : servotune.friction.LuGreParameters
+        The LuGre parameters (Fs, sigma0 for the closed form; all for the describing function).
     omega : float
         Angular frequency [rad/s].
     amplitude : array_like, optional
         Amplitudes [m]; default 0.05 to 50 times Fs/sigma0.
     show_printed : bool
         Also draw the paper's printed Eq 9 (half the cycle's area), dotted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     from .friction import equivalent
 
@@ -255,7 +285,22 @@ def plot_equivalent_damping(params, omega: float, amplitude=None,
 
 def plot_response_hysteresis(response, measured_force=None,
                              title: str = "Friction force against displacement") -> Figure:
-    """Force against displacement of a simulated LuGre response, with measurements if given."""
+    """Draw the force against displacement of a simulated LuGre response.
+
+    Parameters
+    ----------
+    response : servotune.friction.LuGreResponse
+        From :func:`servotune.friction.simulate_lugre`: displacement [m] and force [N].
+    measured_force : array_like, optional
+        Measured forces [N] at the same samples, drawn as dots.
+    title : str, optional
+        The title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     if measured_force is not None:
@@ -299,8 +344,19 @@ def plot_stability_lobes(results, required_depth: float | None = None,
     depth_max : float, optional
         Upper end of the depth axis [m]; default 4 b_crit of the first result.
     title : str, optional
+        The title (default: the set-up).
     ax : matplotlib.axes.Axes, optional
         Draw into these axes (e.g. one panel of a larger figure) and return their figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (that of ``ax`` when given).
+
+    Raises
+    ------
+    ValueError
+        When ``results`` is empty.
     """
     if not isinstance(results, (list, tuple)):
         results = [results]
@@ -369,6 +425,12 @@ def plot_stability_map(stability_map, zoa=None, title: str | None = None) -> Fig
     zoa : StabilityLobes, optional
         Zero-order lobes drawn over the map for comparison.
     title : str, optional
+        The title (default: the set-up).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     from matplotlib.lines import Line2D
 
@@ -412,8 +474,15 @@ def plot_bode(loops, analyses=None, title: str = "Loop transfer functions",
         ``{name: (omega [rad/s], L(j omega) complex array)}``.
     analyses : dict, optional
         ``{name: LoopAnalysis}``; crossover, phase margin and gain margin are marked.
+    title : str, optional
+        The title.
     styles : dict, optional
         ``{name: (colour, line style)}`` (default: a colour per loop, solid lines).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
@@ -458,8 +527,16 @@ def plot_compliance(curves, title: str = "Work-piece compliance",
     Parameters
     ----------
     curves : list of (label, omega [rad/s], H [m/N] complex array)
+        The compliances, one line each.
+    title : str, optional
+        The title.
     marks : list of (label, omega [rad/s], value [m/N]), optional
         Points to mark (e.g. peaks).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
@@ -495,8 +572,16 @@ def plot_sweep_envelope(envelopes, labels=None, reference=None, title=None) -> F
     envelopes : sequence of SweepEnvelope
         From :meth:`servotune.simulate.SimulationResult.sweep_envelope`.
     labels : sequence of str, optional
+        Legend entries, one per envelope.
     reference : dict, optional
         ``{label: (omega [rad/s], |compliance| [m/N])}`` linear curves to draw dashed.
+    title : str, optional
+        The title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     fig = Figure(figsize=(7.0, 4.2), layout="constrained")
     ax = fig.add_subplot()
@@ -517,7 +602,23 @@ def plot_sweep_envelope(envelopes, labels=None, reference=None, title=None) -> F
 
 
 def plot_energies(result, title=None) -> Figure:
-    """Cumulative works done on the structure (force, motor, friction, damping) over time."""
+    """Draw the cumulative works done on the structure over time.
+
+    The works of the external force, the motor, the guide-way friction and the structural
+    damping, with the structure's kinetic plus potential energy at the checkpoints.
+
+    Parameters
+    ----------
+    result : servotune.simulate.SimulationResult
+        A simulation with its work channels.
+    title : str, optional
+        The title (default: the scenario).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     names = ("external force", "motor", "guide-way friction", "structural damping")
     fig = Figure(figsize=(7.0, 4.2), layout="constrained")
     ax = fig.add_subplot()
@@ -536,7 +637,31 @@ def plot_energies(result, title=None) -> Figure:
 
 def plot_pad_hysteresis(result, pad: str, t_start: float = 0.0, t_end: float | None = None,
                         title=None) -> Figure:
-    """Friction force against displacement of one guide-way pad (a hysteresis loop, Fig 2/8)."""
+    """Draw the friction force against displacement of one guide-way pad (Fig 2/8).
+
+    Parameters
+    ----------
+    result : servotune.simulate.SimulationResult
+        A simulation with the pad's displacement and friction force.
+    pad : str
+        The pad DOF, e.g. ``"pad1.x"``.
+    t_start : float, optional
+        Start of the window [s] (default 0); the displacement is drawn from its value there.
+    t_end : float, optional
+        End of the window [s] (default the end of the simulation).
+    title : str, optional
+        The title (default: the scenario).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+
+    Raises
+    ------
+    KeyError
+        When the result has no signal of that pad.
+    """
     key = pad.replace(".", "_")
     t_end = result.t[-1] if t_end is None else t_end
     sel = (result.t >= t_start) & (result.t <= t_end)
@@ -553,8 +678,20 @@ def plot_pad_hysteresis(result, pad: str, t_start: float = 0.0, t_end: float | N
 
 
 def plot_mode_peaks(mode_peaks) -> Figure:
-    """Compliance peak of each work-piece mode against the guide-way damping C (sec 5.2):
-    different modes ask for different optimal C; the chosen C is marked."""
+    """Draw the compliance peak of each work-piece mode against the guide-way damping C.
+
+    Different modes ask for different optimal C (sec 5.2); the chosen C is marked.
+
+    Parameters
+    ----------
+    mode_peaks : servotune.design.ModePeaks
+        From :func:`servotune.design.mode_peaks_vs_damping`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig = Figure(figsize=(8.0, 5.0), layout="constrained")
     ax = fig.add_subplot()
     c = mode_peaks.c_values
@@ -585,6 +722,13 @@ def plot_regime_compliance(before, after, band=None, title: str | None = None) -
         One per regime model (labels ``"before, <model>"``, ``"after, <model>"``).
     band : (float, float), optional
         The requirement band [rad/s], shaded.
+    title : str, optional
+        The title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     fig = Figure(figsize=(8.5, 5.0), layout="constrained")
     ax = fig.add_subplot()
@@ -621,6 +765,13 @@ def plot_regime_verification(regimes, linear=None, title: str | None = None) -> 
         (after solid, before thin grey).
     linear : dict, optional
         ``{regime: [(label, omega [rad/s], H complex), ...]}`` linear curves (dashed).
+    title : str, optional
+        A title over the panels.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     regimes = [r for r in regimes if any(s.envelope for s in r.simulations)] or list(regimes)
     n = max(len(regimes), 1)
