@@ -33,6 +33,13 @@ class OutputExistsError(FileExistsError):
 def check_writable(paths, force: bool = False) -> None:
     """Refuse, before any work is done, to overwrite existing files unless ``force``.
 
+    Parameters
+    ----------
+    paths : iterable of str or os.PathLike
+        The files about to be written.
+    force : bool, optional
+        Overwrite an existing file (default False).
+
     Raises
     ------
     OutputExistsError
@@ -47,7 +54,32 @@ def check_writable(paths, force: bool = False) -> None:
 
 
 def write_atomically(path, data: bytes | str, force: bool = False) -> Path:
-    """Write ``data`` to ``path`` through a temporary file and an atomic rename."""
+    """Write ``data`` to ``path`` through a temporary file and an atomic rename.
+
+    Missing parent folders are created; the file gets the permissions of an ordinary file
+    (0666 less the umask).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    data : bytes or str
+        The contents (str is written as text in the locale's encoding).
+    force : bool, optional
+        Overwrite an existing file (default False).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    OutputExistsError
+        When the file exists and ``force`` is False.
+    OSError
+        When the folder or the file cannot be written.
+    """
     path = Path(path)
     check_writable([path], force)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -67,7 +99,31 @@ def write_atomically(path, data: bytes | str, force: bool = False) -> Path:
 
 
 def save_figure(fig, path, force: bool = False, dpi: int = 150) -> Path:
-    """Save a matplotlib figure atomically (format from the file suffix)."""
+    """Save a matplotlib figure atomically (format from the file suffix).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        The file; its suffix gives the format (PNG when it has none).
+    force : bool, optional
+        Overwrite an existing file (default False).
+    dpi : int, optional
+        Resolution of raster formats [dots per inch] (default 150).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    OutputExistsError
+        When the file exists and ``force`` is False.
+    OSError
+        When the folder or the file cannot be written.
+    """
     import io
 
     path = Path(path)
@@ -77,7 +133,32 @@ def save_figure(fig, path, force: bool = False, dpi: int = 150) -> Path:
 
 
 def write_json(path, obj, force: bool = False) -> Path:
-    """Write a JSON results file atomically."""
+    """Write a JSON results file atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    obj : object
+        JSON-serialisable results (indented by 2; NaN and infinity written as JavaScript
+        literals, as :func:`json.dumps` does by default).
+    force : bool, optional
+        Overwrite an existing file (default False).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    OutputExistsError
+        When the file exists and ``force`` is False.
+    OSError
+        When the folder or the file cannot be written.
+    TypeError
+        When ``obj`` is not JSON-serialisable.
+    """
     return write_atomically(path, json.dumps(obj, indent=2, sort_keys=False) + "\n", force)
 
 
@@ -142,7 +223,29 @@ def tuning_figures(job) -> list[tuple[str, str, object]]:
 
 
 def write_tuning_files(job, folder, force: bool = False) -> list[Path]:
-    """Write the figures of a tuning job (PNG) into ``folder``; returns the paths."""
+    """Write the figures of a tuning job (PNG) into a folder.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+    folder : str or os.PathLike
+        The output folder (created when missing).
+    force : bool, optional
+        Overwrite an existing file (default False).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in the order of :func:`tuning_figures`.
+
+    Raises
+    ------
+    OutputExistsError
+        When a file exists and ``force`` is False.
+    OSError
+        When the folder or the file cannot be written.
+    """
     folder = Path(folder)
     written = []
     for file, _, fig in tuning_figures(job):
@@ -159,10 +262,22 @@ def _fmt(value, fmt="{:.4g}"):
 
 
 def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
-    """A single self-contained HTML page of a tuning job.
+    """Return a single self-contained HTML page of a tuning job.
 
-    ``figures`` are (PNG path, title) of figures already written (their bytes are embedded);
-    without them the figures are drawn here. Paths shown are relative to ``base``.
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+    figures : sequence of (path, str), optional
+        (PNG path, title) of figures already written (their bytes are embedded); without them
+        the figures are drawn here.
+    base : pathlib.Path, optional
+        Folder the paths shown are relative to.
+
+    Returns
+    -------
+    str
+        The HTML page (figures embedded as base64 PNG).
     """
     import base64
     import datetime
@@ -237,7 +352,20 @@ ul.notes { font-size: 90%; color: #444; }
 
 
 def html_page(title: str, body: str) -> str:
-    """A self-contained HTML page in servotune's style (``body`` is HTML already)."""
+    """Return a self-contained HTML page in servotune's style.
+
+    Parameters
+    ----------
+    title : str
+        The page title (escaped here).
+    body : str
+        The page body, HTML already (not escaped).
+
+    Returns
+    -------
+    str
+        The page, with its style sheet inline.
+    """
     import html
 
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>'
@@ -255,7 +383,31 @@ def _relative(path: Path, base: Path) -> str:
 
 
 def write_html_report(job, folder, force: bool = False, figures=None) -> Path:
-    """Write ``report.html`` of a tuning job into ``folder`` (atomically)."""
+    """Write ``report.html`` of a tuning job into a folder (atomically).
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+    folder : str or os.PathLike
+        The output folder (created when missing).
+    force : bool, optional
+        Overwrite an existing file (default False).
+    figures : sequence of (path, str), optional
+        Figures already written, as for :func:`tuning_report_html`.
+
+    Returns
+    -------
+    pathlib.Path
+        The report's path.
+
+    Raises
+    ------
+    OutputExistsError
+        When the file exists and ``force`` is False.
+    OSError
+        When the folder or the file cannot be written.
+    """
     folder = Path(folder)
     return write_atomically(folder / "report.html",
                             tuning_report_html(job, figures, base=folder), force)
