@@ -21,6 +21,20 @@ __all__ = ["Table", "inputs_table", "design_table", "regimes_table", "loops_tabl
 
 @dataclass(frozen=True)
 class Table:
+    """A table of the summary, printed as text (:func:`text`) or HTML (:func:`html_table`).
+
+    Attributes
+    ----------
+    title : str
+        The table's title.
+    head : tuple of str
+        Column headings (all empty: no heading row).
+    rows : tuple of tuple of str
+        The rows, cells already formatted.
+    notes : tuple of str
+        Notes printed under the table, one per line.
+    """
+
     title: str
     head: tuple[str, ...]
     rows: tuple[tuple[str, ...], ...]
@@ -262,7 +276,23 @@ def verdict_lines(job) -> tuple[str, tuple[str, ...]]:
 
 
 def text(table: Table | None, widths=None) -> str:
-    """A table as aligned text lines."""
+    """Return a table as aligned text lines.
+
+    The first column is left-aligned, the others right-aligned; a table whose three headings
+    are empty is a listing, whose second and third columns are not aligned.
+
+    Parameters
+    ----------
+    table : Table or None
+        The table.
+    widths : sequence of int, optional
+        Column widths [characters]; default the widest cell of each column.
+
+    Returns
+    -------
+    str
+        The title, the rows and the notes in parentheses, indented; "" for None.
+    """
     if table is None:
         return ""
     cols = len(table.head)
