@@ -60,6 +60,7 @@ class StudyRun:
         return self.computed / self.wall_time if self.wall_time > 0 else 0.0
 
     def to_dict(self) -> dict:
+        """Return the run as a JSON-ready dictionary (the folder as a string, times in s)."""
         d = dataclasses.asdict(self)
         d["folder"] = str(self.folder)
         d["wall_time_s"] = d.pop("wall_time")
@@ -68,6 +69,20 @@ class StudyRun:
 
 
 def study_folder(study: Study, out) -> Path:
+    """Return the folder a study writes into: ``<out>/study_<name>``.
+
+    Parameters
+    ----------
+    study : Study
+        The study; its name, made safe for a file name, names the folder.
+    out : str or os.PathLike
+        The parent folder.
+
+    Returns
+    -------
+    pathlib.Path
+        The study's folder (not created here).
+    """
     from ..cli._common import safe_name
 
     return Path(out) / f"study_{safe_name(study.name)}"
@@ -112,8 +127,20 @@ def _write_row(rows: Path, row: dict) -> None:
 
 
 def read_rows(folder, keys=None) -> list[dict]:
-    """The finished rows in a study folder (those of ``keys`` only when given), in sample
-    order."""
+    """Return the finished rows in a study folder, in sample order.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The study's folder (its rows are ``rows/<key>.parquet``).
+    keys : collection of str, optional
+        Only the rows of these sample keys (default all).
+
+    Returns
+    -------
+    list of dict
+        One dictionary per row, sorted by ``sample_id``; empty when there is none.
+    """
     import pyarrow.parquet as pq
 
     rows = []
@@ -151,6 +178,7 @@ def run_study(study: Study, out, scheduler: str | None = None, workers: int = 2,
     Parameters
     ----------
     study : Study
+        The study: its samples and what to compute for each.
     out : path-like
         Parent folder; the study writes ``<out>/study_<name>``.
     scheduler : str, optional
@@ -164,6 +192,12 @@ def run_study(study: Study, out, scheduler: str | None = None, workers: int = 2,
         faults through it).
     on_row : callable, optional
         Called with each row once it is written.
+
+    Returns
+    -------
+    StudyRun
+        Samples in the study, skipped (done before), computed in this run and failed, the wall
+        time, the workers and the scheduler.
 
     Raises
     ------

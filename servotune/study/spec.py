@@ -91,6 +91,7 @@ class Variation:
         raise AssertionError(d)
 
     def to_dict(self) -> dict:
+        """Return the variation as a JSON-ready dictionary."""
         return {"path": self.path, "values": list(self.values),
                 "distribution": self.distribution, "parameters": dict(self.parameters),
                 "relative": self.relative}
@@ -106,6 +107,7 @@ class Sample:
     key: str = ""
 
     def to_dict(self) -> dict:
+        """Return the sample as a JSON-ready dictionary (the values keyed by path)."""
         return {"sample_id": self.sample_id, "axis": self.axis, "values": dict(self.values),
                 "key": self.key}
 
@@ -146,9 +148,22 @@ class Study:
         return out
 
     def relative(self, path: str) -> bool:
+        """Return whether a varied field's values multiply the axis's own value.
+
+        Parameters
+        ----------
+        path : str
+            Dotted path of the field, e.g. ``"friction.lugre.fs"``.
+
+        Returns
+        -------
+        bool
+            True when a variation of that path is relative.
+        """
         return any(v.relative for v in self.variations if v.path == path)
 
     def to_dict(self) -> dict:
+        """Return the study's settings as a JSON-ready dictionary (not its tables)."""
         return {"name": self.name, "file": str(self.file), "axes": list(self.axes),
                 "variations": [v.to_dict() for v in self.variations],
                 "compute": list(self.compute), "samples": self.samples, "seed": self.seed,
@@ -346,12 +361,27 @@ def _read_design(path: str, file) -> dict:
 
 def apply_values(tables: dict, values, relative=lambda path: False,
                  applied: dict | None = None) -> dict:
-    """A copy of an axis description's tables with the varied fields set.
+    """Return a copy of an axis description's tables with the varied fields set.
 
     A named LuGre set (``[friction] lugre = "bianchi2014"``) is expanded into its table when a
     field below it varies. With ``relative(path)`` true the value multiplies the field's own.
-    ``applied``, when given, receives each path's value as set (the product for a relative
-    one).
+
+    Parameters
+    ----------
+    tables : dict
+        The axis description as read from its TOML (not changed).
+    values : iterable of (str, object)
+        (dotted path, value) of each varied field.
+    relative : callable, optional
+        ``relative(path) -> bool``: whether the value multiplies the field's own (default
+        never).
+    applied : dict, optional
+        When given, receives each path's value as set (the product for a relative one).
+
+    Returns
+    -------
+    dict
+        The modified deep copy of ``tables``.
 
     Raises
     ------

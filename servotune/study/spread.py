@@ -20,21 +20,30 @@ LUGRE_PREFIX = INPUT_PREFIX + "friction.lugre."
 
 
 def spread_from_study(path, count: int = 4) -> tuple[tuple[str, dict], ...]:
-    """The ``count`` worst samples of a study as friction samples ``(label, {parameter:
-    value})`` (see :func:`servotune.regimes.friction_samples`).
+    """Return the worst samples of a study as friction samples.
+
+    The samples with the highest compliance peak (the nonlinear one where computed) are
+    returned as ``(label, {parameter: value})`` (see
+    :func:`servotune.regimes.friction_samples`).
 
     Parameters
     ----------
     path : path-like
         The study's ``results.parquet`` or its folder.
     count : int
-        How many samples (the worst first).
+        How many samples (the worst first), 1 to 100.
+
+    Returns
+    -------
+    tuple of (str, dict)
+        ``("study sample <id>", {LuGre parameter: value})``, the worst first; at most
+        ``count``.
 
     Raises
     ------
     ValueError
-        A file that is not a study's table, a study that varied no LuGre parameter, or one
-        without a finished sample (the message says which).
+        A file that is not a study's table, a study that varied no LuGre parameter, one
+        without a finished sample (the message says which), or a ``count`` outside 1..100.
     """
     import pyarrow.parquet as pq
 

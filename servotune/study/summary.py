@@ -39,9 +39,11 @@ class StudySummary:
 
     @property
     def verified_share(self) -> float | None:
+        """Verified over done samples [-]; None when not verified or none is done."""
         return None if self.verified is None or not self.done else self.verified / self.done
 
     def to_dict(self) -> dict:
+        """Return the summary as a JSON-ready dictionary."""
         return {"samples": self.samples, "done": self.done, "failed": self.failed,
                 "verified": self.verified, "verified_share": self.verified_share,
                 "spreads": self.spreads,
@@ -59,7 +61,21 @@ def _numbers(rows, key):
 
 
 def summarise(rows: list[dict], samples: int) -> StudySummary:
-    """The summary of a study's rows (``samples``: how many the study has)."""
+    """Return the summary of a study's rows.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows (:func:`~servotune.study.runner.read_rows`).
+    samples : int
+        How many samples the study has (finished or not).
+
+    Returns
+    -------
+    StudySummary
+        Counts of done, failed and verified rows, the min, median and max of each result
+        column over the done rows, the failures and the varied fields.
+    """
     ok = [r for r in rows if r.get("status") == "done"]
     failed = [r for r in rows if r.get("status") == "failed"]
     verified = None
@@ -84,9 +100,26 @@ def _primary(rows):
 
 
 def summary_figures(rows: list[dict], name: str, tuned: bool = True):
-    """(file name, title, figure) of a study: the realised peak and b_crit against each
-    varied numeric field (verified samples in green, others in red), the spread of the tuned
-    design."""
+    """Return the figures of a study.
+
+    The realised peak and b_crit against each varied numeric field (verified samples in
+    green, others in red), and the spread of the tuned design.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows (:func:`~servotune.study.runner.read_rows`); only the done ones are drawn.
+    name : str
+        The study's name, in the titles.
+    tuned : bool, optional
+        Whether the study tuned (then the histograms of C, Kv, Kp, Ti are drawn).
+
+    Returns
+    -------
+    list of (str, str, matplotlib.figure.Figure)
+        (file name, title, figure), pyplot figures the caller closes; empty when there is
+        nothing to draw.
+    """
     import matplotlib.pyplot as plt
 
     ok = [r for r in rows if r.get("status") == "done"]
@@ -128,8 +161,26 @@ def summary_figures(rows: list[dict], name: str, tuned: bool = True):
 
 
 def summary_html(study, run, summary: StudySummary, figures) -> str:
-    """One self-contained page: the study, the counts, the spreads, the failures, figures
-    (``figures``: (PNG bytes, title))."""
+    """Return one self-contained page of a study.
+
+    The study, the counts, the spreads, the first 50 failures and the figures.
+
+    Parameters
+    ----------
+    study : Study
+        The study.
+    run : StudyRun
+        The run (counts, scheduler, wall time).
+    summary : StudySummary
+        The summary (:func:`summarise`).
+    figures : sequence of (bytes, str)
+        (PNG bytes, title) of the figures, embedded.
+
+    Returns
+    -------
+    str
+        The HTML page.
+    """
     import base64
 
     esc = html.escape
@@ -178,8 +229,24 @@ computed per sample: {esc(", ".join(study.compute))}; {len(study.sample_list())}
 
 
 def write_summary(study, run, plots: bool = True) -> tuple[StudySummary, list]:
-    """Write ``summary.html`` (and the figures as PNG unless ``plots`` is False) into the
-    run's folder, each file atomically; returns the summary and the files written."""
+    """Write ``summary.html`` and the figures into the run's folder, each file atomically.
+
+    Parameters
+    ----------
+    study : Study
+        The study.
+    run : StudyRun
+        The run; its folder receives the files.
+    plots : bool, optional
+        Write the figures as PNG too (default True).
+
+    Returns
+    -------
+    summary : StudySummary
+        The summary of the study's finished rows.
+    files : list of pathlib.Path
+        The files written, ``summary.html`` last.
+    """
     import io
 
     from .runner import _write_atomically, read_rows
