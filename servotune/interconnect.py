@@ -33,7 +33,10 @@ __all__ = ["connect"]
 
 def connect(blocks, inputs, outputs, name: str = "sys",
             input_names=None, output_names=None) -> control.StateSpace:
-    """The interconnection of linear blocks with the given external inputs and outputs.
+    """Return the interconnection of linear blocks with the given external inputs and outputs.
+
+    A block input is fed by the block output of the same name, else by the external input of
+    that name, else it is left at zero.
 
     Parameters
     ----------
@@ -45,8 +48,14 @@ def connect(blocks, inputs, outputs, name: str = "sys",
     outputs : sequence of str
         Signals produced by blocks, in the order of the result's outputs.
     name : str
+        Name of the result; its states are ``<block name>_<state>``.
     input_names, output_names : sequence of str, optional
         Labels of the result's inputs and outputs (default the signal names).
+
+    Returns
+    -------
+    control.StateSpace
+        The closed interconnection: the blocks' states, the external inputs, the outputs.
 
     Raises
     ------

@@ -198,6 +198,11 @@ def casadi_iteration_callback(name: str = "servotune_interrupt", n_x: int = 0,
         Name of the casadi function.
     n_x, n_g : int
         Number of variables and constraints of the NLP.
+
+    Returns
+    -------
+    casadi.Callback
+        The callback; it returns 1 (stop) once the interruption flag is set, else 0.
     """
     import casadi as ca
 

@@ -161,6 +161,7 @@ def transmission_check(structure: ModalModel, drive: Drive,
     Returns
     -------
     TransmissionCheck
+        The structure's ratio, the drive's and whether they agree within ``tolerance``.
 
     Raises
     ------
@@ -351,6 +352,7 @@ def axis_model_checks(axis: Axis, tolerance: float = TRANSMISSION_TOLERANCE,
     Parameters
     ----------
     axis : Axis
+        The axis: its structure, drive, pads and requirement band.
     tolerance : float
         Largest accepted |structure ratio / drive ratio - 1|.
     margin : float

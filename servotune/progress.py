@@ -99,7 +99,15 @@ class Task:
             self._bar.update(n)
 
     def report(self, done, total=None) -> None:
-        """``done`` of ``total`` steps (or seconds, or ...) done; a progress callback."""
+        """Report ``done`` of ``total`` steps (or seconds, or ...) done; a progress callback.
+
+        Parameters
+        ----------
+        done : int or float
+            Steps done so far (not an increment); the bar advances by the difference.
+        total : int or float, optional
+            The number of steps, when it changed or became known (default: unchanged).
+        """
         if total is not None and total != self.total:
             self.total = total
             if self._bar is not None:

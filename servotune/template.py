@@ -226,6 +226,11 @@ def write_template(folder, force: bool = False, name: str = "my_axis") -> list[P
     name : str
         ``[axis] name``; ``servotune init`` passes the folder's name (:func:`axis_name_for`).
 
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, ``axis.toml`` then ``structure.npz``.
+
     Raises
     ------
     OutputExistsError
