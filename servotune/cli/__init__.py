@@ -144,8 +144,20 @@ def _one_blas_thread() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``servotune`` command; returns the process exit status (0 done, 1 an error of
-    the input or a design that failed its checks, 2 a usage error, 130 interrupted)."""
+    """Run the ``servotune`` command and return the process exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 done, 1 an error of the input or a design that failed its checks, 2 a usage error,
+        3 a design whose nonlinear verification was skipped (``tune --no-simulation``), 130
+        interrupted.
+    """
     _one_blas_thread()
     from .. import interrupt, progress
     from ._common import CliError, show_progress

@@ -28,6 +28,13 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune bode`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "bode", help="loop transfer functions of the velocity and position loops, with margins",
         description="Bode diagram of the velocity loop (opened at the motor-speed feedback, "
@@ -41,6 +48,19 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune bode``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import progress
 
     with progress.task(f"loading {args.axis}"):

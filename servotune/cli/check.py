@@ -22,6 +22,13 @@ DEFAULT_MARGIN = 1.5  # as servotune.structure.coverage.DEFAULT_MARGIN (kept her
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune check`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "check", help="check mass/stiffness matrices (symmetry, definiteness, rigid-body "
                       "mass, fixed-base frequencies, modal effective mass) and a reduction "
@@ -103,6 +110,19 @@ def _check_axis(args, coords, progress):
 
 
 def run(args) -> int:
+    """Run ``servotune check``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0 when every check passes, 1 when one fails. Errors are raised, and
+        reported by :func:`servotune.cli.main` with status 1.
+    """
     from .. import progress
 
     with progress.task("loading the structure tools"):

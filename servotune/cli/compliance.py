@@ -22,6 +22,13 @@ FIG9_C = (5e3, 5e4, 5e5, 5e6, 5e7)  # the paper's Fig 9 [N s/m]
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune compliance`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "compliance", help="work-piece X compliance with a guide-way contact model (Fig 9)",
         description="Closed-loop work-piece X compliance x/F with the chosen guide-way model, "
@@ -37,6 +44,19 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune compliance``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import progress
 
     check_contact_args(args)  # flags that do not fit --contact: refused before any work

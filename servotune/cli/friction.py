@@ -34,6 +34,13 @@ _DECAY_SPEED = number(0.0, 10.0, low_open=True, example="1e-3", unit="m/s")
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune friction`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "friction", help="LuGre friction: equivalent damping (Eq 8-10), figures, fits",
         description="Equivalent viscous damping of guide-way friction at amplitude A and "
@@ -73,6 +80,19 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune friction``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     import dataclasses
 
     from .. import progress
@@ -169,6 +189,19 @@ def _fixed(items) -> dict[str, float]:
 
 
 def run_fit(args) -> int:
+    """Run ``servotune friction fit``: identify LuGre parameters from a measurement CSV.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status, 0. Errors are raised, and reported by :func:`servotune.cli.main`
+        with status 1.
+    """
     from .. import progress
 
     with progress.task("loading the friction models"):

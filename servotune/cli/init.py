@@ -18,6 +18,13 @@ FILES = ("axis.toml", "structure.npz")
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune init`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "init", help="write a commented starter axis description (axis.toml + structure.npz)",
         description="Write a complete, loadable axis description into DIR: a commented "
@@ -56,6 +63,19 @@ def _check_folder(folder: Path, force: bool) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune init``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     folder = args.folder
     _check_folder(folder, args.force)
     from ..template import axis_name_for, write_template

@@ -61,6 +61,13 @@ class _ModeAction(argparse.Action):
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune lobes`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "lobes", help="chatter stability lobes, b_crit and the chatter margin (sec 2)",
         description="Stability lobes of milling from the tool/work-piece compliance: the "
@@ -189,6 +196,19 @@ def _subject(args, axis) -> str:
 
 
 def run(args) -> int:
+    """Run ``servotune lobes``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import progress
 
     with progress.task("loading the compliance"):

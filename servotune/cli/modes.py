@@ -33,6 +33,13 @@ WP_X = "wp.x"
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune modes`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "modes", help="natural frequencies and each mode's share of work-piece X motion",
         description="Natural frequencies of the axis structure and, per mode, its share of "
@@ -53,6 +60,19 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune modes``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import progress
 
     with progress.task(f"loading {args.axis}"):

@@ -28,6 +28,13 @@ def _scheduler(text: str) -> str:
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune study`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "study", help="an axis sampled over what varies, tuned/verified per sample on "
                       "dask.distributed",
@@ -60,6 +67,19 @@ class _Written:
 
 
 def run(args) -> int:
+    """Run ``servotune study``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import progress
     from ..study import (
         StudyFolderError,

@@ -33,9 +33,28 @@ def default_axis() -> Path:
 
 
 def load_setup(path, continuous: bool = True):
-    """Load an axis description (``servotune.axis.load_axis``) and turn it into the set-up of
-    the simulation; ``continuous`` takes the drive in continuous time, as the paper models it
-    (sec 3), instead of the digital drive of ``[drive.sampling]``."""
+    """Load an axis description and turn it into the set-up of the simulation.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The axis folder (with ``axis.toml``), read by :func:`servotune.axis.load_axis`.
+    continuous : bool, optional
+        Take the drive in continuous time, as the paper models it (sec 3), instead of the
+        digital drive of ``[drive.sampling]`` (default True).
+
+    Returns
+    -------
+    servotune.simulate.setup.AxisSetup
+        The set-up of the nonlinear simulation.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder has no ``axis.toml``.
+    AxisFormatError
+        When the description is not valid (:func:`servotune.axis.load_axis`).
+    """
     from ..axis import load_axis
     from ..simulate.setup import axis_setup
 
@@ -48,6 +67,13 @@ def load_setup(path, continuous: bool = True):
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune table3`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "table3", help="simulate the paper's Table 3 (sine sweeps with LuGre friction)",
         description="The 15 trials of Table 3 (Bianchi et al. 2014, sec 5.3): a force at the "
@@ -68,6 +94,19 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune table3``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import interrupt, progress
 
     if not args.f_start_hz < args.f_end_hz:

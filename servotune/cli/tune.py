@@ -54,6 +54,13 @@ def _free(text: str) -> tuple[str, ...]:
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune tune`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "tune", help="tune guide-way damping C, Kv and the velocity PI (casadi), verify",
         description="Tune the guide-way damping C and the position/velocity loop gains of an "
@@ -99,6 +106,20 @@ def exit_status(job) -> int:
 
 
 def run(args) -> int:
+    """Run ``servotune tune``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0 when the design is verified, 1 when it is not, 3 when the
+        nonlinear verification was skipped. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     from .. import interrupt, progress
 
     with progress.task(f"loading {args.axis}"):

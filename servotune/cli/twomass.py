@@ -21,6 +21,13 @@ _ALPHA = number(0.0, 100.0, low_open=True, example=0.3)
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune twomass`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "twomass", help="fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
         description="Fixed points, optimal guide-way damping Copt, optimal peak and limit "
@@ -37,6 +44,19 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    """Run ``servotune twomass``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by
+        :func:`servotune.cli.main` with status 1.
+    """
     import warnings
 
     from .. import twomass

@@ -140,6 +140,13 @@ def _axis_folder(path: Path, axis) -> Path:
 
 
 def add_parser(subparsers) -> None:
+    """Add the ``servotune verify`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
     p = subparsers.add_parser(
         "verify", help="does the nonlinear axis (LuGre) do what a tuned design claims?",
         description="Check a tuned design (the results.json of servotune tune, e.g. "
@@ -183,6 +190,19 @@ def _band(args):
 
 
 def run(args) -> int:
+    """Run ``servotune verify``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0 when the design is verified, 1 when it is not. Errors are raised,
+        and reported by :func:`servotune.cli.main` with status 1.
+    """
     from .. import interrupt, progress
 
     band = _band(args)
