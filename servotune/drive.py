@@ -181,7 +181,13 @@ class PIController:
         object.__setattr__(self, "ti", _positive("PIController", "ti", self.ti, allow_inf=True))
 
     def transfer_function(self) -> control.TransferFunction:
-        """The controller as a python-control transfer function."""
+        """Return the controller as a python-control transfer function.
+
+        Returns
+        -------
+        control.TransferFunction
+            ``kp (ti s + 1) / (ti s)``, or ``kp`` for ``ti = inf``.
+        """
         if math.isinf(self.ti):
             return control.tf([self.kp], [1.0])
         return control.tf([self.kp * self.ti, self.kp], [self.ti, 0.0])
@@ -225,7 +231,13 @@ class LowPassFilter:
                            _positive("LowPassFilter", "damping_ratio", self.damping_ratio))
 
     def transfer_function(self) -> control.TransferFunction:
-        """Return the filter as a python-control transfer function (unit static gain)."""
+        """Return the filter as a python-control transfer function (unit static gain).
+
+        Returns
+        -------
+        control.TransferFunction
+            ``omega_c^2 / (s^2 + 2 zeta omega_c s + omega_c^2)``.
+        """
         w = 2.0 * math.pi * self.f_hz
         return control.tf([w * w], [1.0, 2.0 * self.damping_ratio * w, w * w])
 
@@ -252,7 +264,13 @@ class NotchFilter:
         object.__setattr__(self, "depth", depth)
 
     def transfer_function(self) -> control.TransferFunction:
-        """Return the notch as a python-control transfer function (gain ``depth`` at f_hz)."""
+        """Return the notch as a python-control transfer function (gain ``depth`` at f_hz).
+
+        Returns
+        -------
+        control.TransferFunction
+            The notch of the class docstring.
+        """
         w = 2.0 * math.pi * self.f_hz
         zp = 0.5 * self.width
         return control.tf([1.0, 2.0 * zp * self.depth * w, w * w], [1.0, 2.0 * zp * w, w * w])
@@ -469,7 +487,13 @@ class Sampling:
         return (self.computation_delay + 0.5) * self.position_period
 
     def velocity_loop_delay(self) -> float:
-        """Total pure delay around the velocity loop outside the current loop [s]."""
+        """Return the total pure delay around the velocity loop outside the current loop [s].
+
+        Returns
+        -------
+        float
+            ``velocity_delay + speed_measurement_delay`` [s].
+        """
         return self.velocity_delay + self.speed_measurement_delay
 
     def delay_block(self, delay: float, inputs: str, outputs: str,
@@ -515,12 +539,30 @@ class Sampling:
         return np.exp(-np.asarray(s) * delay)
 
     def speed_filter_response(self, s) -> np.ndarray:
-        """The speed measurement: half-period delay times the first-order filter."""
+        """Return the speed measurement's response: half-period delay times the first-order filter.
+
+        Parameters
+        ----------
+        s : array_like of complex
+            Complex frequencies [rad/s].
+
+        Returns
+        -------
+        numpy.ndarray
+            ``exp(-s T_v / 2) / (1 + s T_f)``, shape of ``s`` (T_v the velocity period, T_f the
+            speed filter).
+        """
         s = np.asarray(s)
         return self.delay_response(self.speed_measurement_delay, s) / (1.0 + s * self.speed_filter)
 
     def to_dict(self) -> dict:
-        """SI values, with the derived delays."""
+        """SI values, with the derived delays.
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"current_period": self.current_period, "velocity_period": self.velocity_period,
                 "position_period": self.position_period,
                 "computation_delay_periods": self.computation_delay,
@@ -619,10 +661,20 @@ class Drive:
         return kv_to_m_per_min_per_mm(self.kv)
 
     def following_error(self, feed: float) -> float:
-        """Steady following error [m] at a constant feed [m/s]: (1 - kvff) v / Kv.
+        """Return the steady following error [m] at a constant feed: (1 - kvff) v / Kv.
 
         Exact for a type-1 position loop around a velocity loop with integral action (the
         velocity loop then has no steady error at constant speed).
+
+        Parameters
+        ----------
+        feed : float
+            The constant feed speed v [m/s].
+
+        Returns
+        -------
+        float
+            The following error [m].
         """
         return (1.0 - self.velocity_feedforward) * float(feed) / self.kv
 
@@ -649,7 +701,13 @@ class Drive:
         return self.limits.speed_max * self.ratio
 
     def torque_filter(self) -> control.TransferFunction:
-        """Product of the set-point filters (1 when there are none)."""
+        """Return the product of the set-point filters (1 when there are none).
+
+        Returns
+        -------
+        control.TransferFunction
+            The low-pass times the notch, those that are present.
+        """
         tf = control.tf([1.0], [1.0])
         for f in (self.lowpass, self.notch):
             if f is not None:
@@ -658,7 +716,7 @@ class Drive:
 
 
 def drive_blocks(drive: Drive) -> list[control.StateSpace]:
-    """The cascade as python-control blocks with named signals, for ``control.interconnect``.
+    """Return the cascade as python-control blocks with named signals, for ``control.interconnect``.
 
     Signals (SI):
 
@@ -683,6 +741,17 @@ def drive_blocks(drive: Drive) -> list[control.StateSpace]:
 
     The position feedback ``x_fb`` and the speeds are produced by the plant (see
     :mod:`servotune.plant`); these blocks only compute.
+
+    Parameters
+    ----------
+    drive : Drive
+        The drive.
+
+    Returns
+    -------
+    list of control.StateSpace
+        The named blocks: the position P controller, the velocity PI, the current PI and
+        winding, the filters and feed-forwards, and the delay blocks of a digital drive.
     """
     kv, r = drive.kv, drive.ratio
     sampling = drive.digital

@@ -61,7 +61,13 @@ class CuttingForce:
     force: np.ndarray
 
     def to_dict(self) -> dict:
-        """Return the scalar results as a JSON-ready dictionary (SI; forces in N)."""
+        """Return the scalar results as a JSON-ready dictionary (SI; forces in N).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (str, numbers, lists, None).
+        """
         return {"direction": self.direction, "depth": self.depth,
                 "feed_per_tooth": self.feed_per_tooth, "mean_n": self.mean,
                 "peak_to_peak_n": self.peak_to_peak, "first_harmonic_n": self.first_harmonic}

@@ -357,6 +357,11 @@ def read_frf_csv(path) -> control.FrequencyResponseData:
     missing direct term means a rigid direction, missing cross terms mean no coupling (give
     both xy and yx or neither). Lines starting with ``#`` are comments.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
     Returns
     -------
     control.FrequencyResponseData

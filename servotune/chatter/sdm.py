@@ -443,7 +443,13 @@ class StabilityMap:
         return self.spectral_radius < 1.0
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (SI; speeds in rpm)."""
+        """JSON-ready dictionary (SI; speeds in rpm).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (str, numbers, lists, None).
+        """
         by_speed = (None if self.intervals_by_speed is None
                     else np.asarray(self.intervals_by_speed).tolist())
         return {"method": "sdm", "setup": self.setup.to_dict(), "intervals": self.intervals,
@@ -452,8 +458,18 @@ class StabilityMap:
                 "spectral_radius": self.spectral_radius.tolist()}
 
     def plot(self, **kwargs):
-        """Contour of the spectral radius with the boundary |mu| = 1
-        (:func:`servotune.plots.plot_stability_map`)."""
+        """Draw the spectral radius with the boundary ``|mu| = 1``.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`servotune.plots.plot_stability_map`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+        """
         from .. import plots
 
         return plots.plot_stability_map(self, **kwargs)
@@ -570,7 +586,13 @@ class SdmLobes(StabilityLobes):
     max_error_estimate: float = math.nan
 
     def to_dict(self) -> dict:
-        """Return :meth:`StabilityLobes.to_dict` with the intervals and error estimates by speed."""
+        """Return :meth:`StabilityLobes.to_dict` with the intervals and error estimates by speed.
+
+        Returns
+        -------
+        dict
+            JSON-ready values (str, numbers, lists, None).
+        """
         out = super().to_dict()
         out["intervals_by_speed"] = (None if self.intervals_by_speed is None
                                      else np.asarray(self.intervals_by_speed).tolist())

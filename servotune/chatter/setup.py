@@ -212,7 +212,13 @@ class MillingSetup:
         return math.pi
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (SI; angles also in degrees under ``*_deg`` keys)."""
+        """JSON-ready dictionary (SI; angles also in degrees under ``*_deg`` keys).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (str, numbers, lists, None).
+        """
         return {
             "teeth": self.teeth,
             "kt": self.kt,
@@ -244,6 +250,16 @@ def directional_matrix(setup: MillingSetup) -> np.ndarray:
 
     ``D = (1/T) int_0^T H(t) dt = -(N K_t / (4 pi)) [alpha]`` (Altintas and Budak 1995, Eq 12,
     the "average directional factors"); see the module docstring for [alpha].
+
+    Parameters
+    ----------
+    setup : MillingSetup
+        The milling set-up.
+
+    Returns
+    -------
+    numpy.ndarray
+        D, shape (2, 2) [N/m^2].
 
     Examples
     --------

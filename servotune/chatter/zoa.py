@@ -372,8 +372,15 @@ class StabilityLobes:
         return self.min_depth_limit / _check_depth(required_depth)
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary in SI (speeds in rpm, frequencies also in Hz); speeds where
-        no limit was found carry ``null``."""
+        """Return a JSON-ready dictionary in SI (speeds in rpm, frequencies also in Hz).
+
+        Speeds where no limit was found carry ``null``.
+
+        Returns
+        -------
+        dict
+            JSON-ready values (str, numbers, lists, None).
+        """
         limit = [float(b) if math.isfinite(b) else None for b in self.depth_limit]
         return {
             "method": self.method,
@@ -392,7 +399,18 @@ class StabilityLobes:
         }
 
     def plot(self, **kwargs):
-        """The stability lobe diagram (:func:`servotune.plots.plot_stability_lobes`)."""
+        """Draw the stability lobe diagram (:func:`servotune.plots.plot_stability_lobes`).
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`servotune.plots.plot_stability_lobes`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+        """
         from .. import plots
 
         return plots.plot_stability_lobes(self, **kwargs)

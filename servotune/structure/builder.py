@@ -88,7 +88,18 @@ class StructureBuilder:
         return {k: v.copy() for k, v in self._nodes.items()}
 
     def add_dof(self, name: str) -> None:
-        """A scalar DOF (e.g. a rotation ``motor.rotor`` [rad] or a slide translation [m])."""
+        """Add a scalar DOF (e.g. a rotation ``motor.rotor`` [rad] or a slide translation [m]).
+
+        Parameters
+        ----------
+        name : str
+            The DOF name.
+
+        Raises
+        ------
+        ValueError
+            When the DOF exists already.
+        """
         name = str(name)
         if name in self._dofs:
             raise ValueError(f"DOF {name!r} exists already")
@@ -120,7 +131,23 @@ class StructureBuilder:
             self.add_dof(f"{name}.{c}")
 
     def index(self, name: str) -> int:
-        """Row of a DOF name."""
+        """Return the row of a DOF name.
+
+        Parameters
+        ----------
+        name : str
+            The DOF name.
+
+        Returns
+        -------
+        int
+            Its row (0-based).
+
+        Raises
+        ------
+        ValueError
+            For an unknown DOF.
+        """
         try:
             return self._dofs[name]
         except KeyError:
@@ -299,7 +326,17 @@ class StructureBuilder:
 
     # -- assembly ------------------------------------------------------------------------------
     def assemble(self):
-        """Sparse (CSR) mass and stiffness matrices and the DOF names."""
+        """Assemble the sparse (CSR) mass and stiffness matrices.
+
+        Returns
+        -------
+        mass : scipy.sparse.csr_array
+            The mass matrix [kg, kg m^2], (n, n).
+        stiffness : scipy.sparse.csr_array
+            The stiffness matrix [N/m, N m/rad], (n, n).
+        dofs : tuple of str
+            The n DOF names, in assembly order.
+        """
         n = len(self._dofs)
 
         def build(blocks):

@@ -161,7 +161,13 @@ class CraigBamptonCheck:
         return bool(ok)
 
     def to_dict(self) -> dict:
-        """Plain values for JSON (SI; frequencies in Hz as the names say)."""
+        """Plain values for JSON (SI; frequencies in Hz as the names say).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         out = {}
         for key in self.__dataclass_fields__:
             value = getattr(self, key)

@@ -72,7 +72,13 @@ class BandCoverage:
     message: str
 
     def to_dict(self) -> dict:
-        """Plain values for JSON (``None`` for an unbounded frequency)."""
+        """Plain values for JSON (``None`` for an unbounded frequency).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"band_hz": list(self.band_hz), "margin": self.margin,
                 "required_hz": self.required_hz, "reached_hz": self.reached_hz,
                 "complete_below_hz": _finite(self.complete_below_hz),
@@ -87,6 +93,16 @@ def fixed_interface_frequencies(model: ModalModel) -> np.ndarray:
     From its reduction information when it has it, else from its modal DOFs ``mode.*``
     (eigenvalues of their block of K and M, which for a Craig-Bampton model are diag(omega^2)
     and I); empty when it has neither.
+
+    Parameters
+    ----------
+    model : ModalModel
+        A reduced model.
+
+    Returns
+    -------
+    numpy.ndarray
+        The frequencies [Hz], ascending.
     """
     if model.reduction is not None:
         return np.array(model.reduction.fixed_interface_hz)

@@ -128,6 +128,16 @@ def read_harwell_boeing(path) -> scipy.sparse.csc_array:
     For RSA files (one triangle stored, as Ansys ``HBMAT`` writes) the other triangle is
     filled in, so the result is the full symmetric matrix.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The Harwell-Boeing file.
+
+    Returns
+    -------
+    scipy.sparse.csc_array
+        The matrix.
+
     Raises
     ------
     MatrixFileError
@@ -177,10 +187,20 @@ def read_harwell_boeing(path) -> scipy.sparse.csc_array:
 
 
 def read_op4(path) -> dict:
-    """All matrices of a Nastran OUTPUT4 file (ASCII or binary), by lower-case name.
+    """Read all matrices of a Nastran OUTPUT4 file (ASCII or binary), by lower-case name.
 
     Read by pyyeti's ``pyyeti.nastran.op4.read``; dense matrices stay dense arrays, sparse
     ones come as ``scipy.sparse`` arrays.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The OUTPUT4 file.
+
+    Returns
+    -------
+    dict
+        Lower-case matrix name -> numpy.ndarray or scipy.sparse array.
 
     Raises
     ------
@@ -305,8 +325,27 @@ def read_matrix(path, name: str | None = None):
 
 
 def read_dof_map(path) -> tuple[str, ...]:
-    """DOF names from a CSV map (``name``, or ``node`` and ``dof`` columns; optional
-    1-based ``index``)."""
+    """Read DOF names from a CSV map.
+
+    The columns are ``name``, or ``node`` and ``dof``; an optional 1-based ``index`` orders the
+    rows.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    tuple of str
+        The DOF names in row order (by ``index`` when given).
+
+    Raises
+    ------
+    MatrixFileError
+        When the file cannot be read or is empty, lacks the columns, has a bad ``index``, an
+        empty or a duplicate name.
+    """
     path = Path(path)
     try:
         with open(path, newline="") as handle:
@@ -366,8 +405,24 @@ class StructureMatrices:
         return len(self.dofs)
 
     def index(self, names) -> np.ndarray:
-        """Row indices of DOF names; :class:`UnknownDofError` names the file and lists a few
-        known names."""
+        """Return the row indices of DOF names.
+
+        Parameters
+        ----------
+        names : sequence of str
+            DOF names (a sequence; a single str is not taken as one name).
+
+        Returns
+        -------
+        numpy.ndarray of int
+            Their rows (0-based).
+
+        Raises
+        ------
+        UnknownDofError
+            For names the matrices do not have; the message names the file and lists a few
+            known names.
+        """
         lookup = {d: i for i, d in enumerate(self.dofs)}
         missing = [x for x in names if x not in lookup]
         if missing:
@@ -376,7 +431,24 @@ class StructureMatrices:
         return np.array([lookup[x] for x in names], dtype=int)
 
     def to_modal_model(self, damping_ratio=0.03) -> ModalModel:
-        """The matrices as a (dense) :class:`ModalModel`, for models of a few thousand DOFs."""
+        """Return the matrices as a (dense) ModalModel, for models of a few thousand DOFs.
+
+        Parameters
+        ----------
+        damping_ratio : float or array_like, optional
+            Modal damping (see :class:`~servotune.structure.model.ModalModel`; default 0.03).
+
+        Returns
+        -------
+        ModalModel
+            The dense model.
+
+        Raises
+        ------
+        ValueError
+            For more than 5000 DOFs (reduce them first with
+            :func:`~servotune.structure.reduction.craig_bampton`).
+        """
         if self.n > 5000:
             raise ValueError(f"{self.source}: {self.n} DOFs is too many for a dense model; "
                              "reduce it first with craig_bampton")
@@ -572,9 +644,27 @@ def write_npz(path, mass, stiffness, dofs, force: bool = False) -> Path:
 
 
 def read_coordinates(path) -> dict[str, np.ndarray]:
-    """Node coordinates [m] from a CSV file with a header ``node,x,y,z`` (for the geometric
-    rigid-body motions of :func:`servotune.structure.cb_check` and for ports given by
-    position). Integer node ids are normalised (``"0012"`` and ``"12.0"`` are node 12)."""
+    """Read node coordinates [m] from a CSV file with a header ``node,x,y,z``.
+
+    For the geometric rigid-body motions of :func:`servotune.structure.cb_check` and for ports
+    given by position. Integer node ids are normalised (``"0012"`` and ``"12.0"`` are node 12).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    dict
+        Node id (str) -> position, numpy array (3,) [m].
+
+    Raises
+    ------
+    MatrixFileError
+        When the file cannot be read, lacks the header, or a node is missing, listed twice or
+        has a coordinate that is not a finite number.
+    """
     path = Path(path)
     try:
         with open(path, newline="") as handle:

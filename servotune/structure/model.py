@@ -133,7 +133,13 @@ class ReductionInfo:
         return self.fixed_interface_hz[-1] if self.fixed_interface_hz else 0.0
 
     def to_dict(self) -> dict:
-        """Plain values for JSON (``None`` for an unknown or unbounded frequency)."""
+        """Plain values for JSON (``None`` for an unknown or unbounded frequency).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         def finite(x):
             return float(x) if math.isfinite(x) else None
 
@@ -244,7 +250,17 @@ class ModalModel:
         return len(self.dofs)
 
     def index(self, names) -> np.ndarray:
-        """Row indices of DOF names (a str gives a 0-d array).
+        """Return the row indices of DOF names (a str gives a 0-d array).
+
+        Parameters
+        ----------
+        names : str or sequence of str
+            DOF names.
+
+        Returns
+        -------
+        numpy.ndarray of int
+            Their rows (0-based); 0-d for a str.
 
         Raises
         ------
@@ -266,16 +282,35 @@ class ModalModel:
 
     # -- modes ---------------------------------------------------------------------------
     def natural_frequencies(self) -> np.ndarray:
-        """Undamped natural angular frequencies [rad/s], ascending (0 for rigid-body modes)."""
+        """Return the undamped natural angular frequencies [rad/s], ascending (rigid-body: 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            omega_j [rad/s], shape (n,).
+        """
         return self._modes[0].copy()
 
     def mode_shapes(self) -> np.ndarray:
-        """Mass-normalised mode shapes as columns, Phi^T M Phi = I."""
+        """Return the mass-normalised mode shapes as columns, Phi^T M Phi = I.
+
+        Returns
+        -------
+        numpy.ndarray
+            Phi, shape (n, n), one column per mode in the order of :meth:`natural_frequencies`.
+        """
         return self._modes[1].copy()
 
     def modal_damping_ratios(self) -> np.ndarray:
-        """Damping ratio of each undamped mode from the physical damping matrix (diagonal of
-        Phi^T D Phi over 2 omega; NaN for rigid-body modes)."""
+        """Return the damping ratio of each undamped mode from the physical damping matrix.
+
+        The diagonal of Phi^T D Phi over 2 omega; NaN for rigid-body modes.
+
+        Returns
+        -------
+        numpy.ndarray
+            One ratio [-] per mode, in the order of :meth:`natural_frequencies`.
+        """
         omega, phi = self._modes
         diag = np.einsum("ij,ik,kj->j", phi, self.damping, phi)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -283,9 +318,26 @@ class ModalModel:
 
     # -- derived models --------------------------------------------------------------------
     def locked(self, names) -> ModalModel:
-        """The model with these DOFs held at zero (e.g. guide-way pads stuck).
+        """Return the model with these DOFs held at zero (e.g. guide-way pads stuck).
 
         Rows and columns are removed from M, K and the physical damping matrix D.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The DOFs held.
+
+        Returns
+        -------
+        ModalModel
+            The model without those DOFs; its :meth:`port_receptance` goes through this model's.
+
+        Raises
+        ------
+        UnknownDofError
+            For a DOF the model does not have.
+        ValueError
+            When every DOF would be held.
 
         Examples
         --------
@@ -306,7 +358,18 @@ class ModalModel:
         return held
 
     def with_damping(self, damping_ratio) -> ModalModel:
-        """The same M and K with modal damping re-assigned on this configuration's modes."""
+        """Return the same M and K with modal damping re-assigned on this configuration's modes.
+
+        Parameters
+        ----------
+        damping_ratio : float or array_like
+            One modal damping ratio [-], or one per mode.
+
+        Returns
+        -------
+        ModalModel
+            The model with the damping D of those ratios.
+        """
         return ModalModel(self.mass, self.stiffness, self.dofs, damping_ratio=damping_ratio,
                           reduction=self.reduction)
 
@@ -562,19 +625,54 @@ class ModalModel:
 
     # -- participation -----------------------------------------------------------------------
     def modal_compliance(self, dof: str) -> np.ndarray:
-        """Static compliance each mode contributes at a DOF: phi_j(dof)^2 / omega_j^2 [m/N]
-        (0 for rigid-body modes), in the order of :meth:`natural_frequencies`.
+        """Return the static compliance each mode contributes at a DOF.
+
+        phi_j(dof)^2 / omega_j^2 [m/N] (0 for rigid-body modes), in the order of
+        :meth:`natural_frequencies`.
 
         Summed over the modes it is the static driving-point compliance of a model without
-        rigid-body modes (modal expansion of K^-1)."""
+        rigid-body modes (modal expansion of K^-1).
+
+        Parameters
+        ----------
+        dof : str
+            The DOF.
+
+        Returns
+        -------
+        numpy.ndarray
+            phi_j(dof)^2 / omega_j^2 [m/N] per mode.
+
+        Raises
+        ------
+        UnknownDofError
+            For a DOF the model does not have.
+        """
         omega, phi = self._modes
         row = phi[int(self.index(dof))]
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(omega > 0, row**2 / np.where(omega > 0, omega, 1.0) ** 2, 0.0)
 
     def participation(self, dof: str) -> np.ndarray:
-        """Share of each mode in the motion of a DOF: its part of the static compliance there,
-        phi_j(dof)^2 / omega_j^2 over the sum of all flexible modes (rigid-body modes get 0).
+        """Return the share of each mode in the motion of a DOF.
+
+        Its part of the static compliance there, phi_j(dof)^2 / omega_j^2 over the sum of all
+        flexible modes (rigid-body modes get 0).
+
+        Parameters
+        ----------
+        dof : str
+            The DOF.
+
+        Returns
+        -------
+        numpy.ndarray
+            The share [-] of each mode, summing to 1 (all 0 when no flexible mode moves the DOF).
+
+        Raises
+        ------
+        UnknownDofError
+            For a DOF the model does not have.
 
         Examples
         --------

@@ -59,7 +59,18 @@ class PortError(ValueError):
 
 
 def normalise_direction(text) -> str | None:
-    """The direction ``x``/``y``/``z``/``rx``/``ry``/``rz`` of an export's label, or None.
+    """Return the direction ``x``/``y``/``z``/``rx``/``ry``/``rz`` of an export's label, or None.
+
+    Parameters
+    ----------
+    text : str
+        The direction as an export labels it: ``x``, ``UX``, ``rotz``, Nastran ``1``-``6``,
+        ``T1``-``R3`` ...
+
+    Returns
+    -------
+    str or None
+        The direction, None when the label is not one.
 
     Examples
     --------
@@ -70,8 +81,21 @@ def normalise_direction(text) -> str | None:
 
 
 def normalise_node(text) -> str:
-    """A node id as text: integers lose leading zeros and a ``.0`` tail (``"0012.0"`` ->
-    ``"12"``); other ids are stripped."""
+    """Return a node id as text.
+
+    Integers lose leading zeros and a ``.0`` tail (``"0012.0"`` -> ``"12"``); other ids are
+    stripped.
+
+    Parameters
+    ----------
+    text : str or int
+        The node id as written.
+
+    Returns
+    -------
+    str
+        The normalised id.
+    """
     text = str(text).strip()
     try:
         value = float(text)

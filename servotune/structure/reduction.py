@@ -154,7 +154,24 @@ class CraigBamptonBasis:
                              method=self.method, restarts=self.restarts)
 
     def expand(self, reduced) -> np.ndarray:
-        """Full-model displacements from reduced coordinates (vector or columns)."""
+        """Return the full-model displacements of reduced coordinates (a vector or columns).
+
+        Parameters
+        ----------
+        reduced : array_like
+            Reduced coordinates, shape (n_b + n_m,) or (n_b + n_m, k): the boundary DOFs then the
+            modal coordinates.
+
+        Returns
+        -------
+        numpy.ndarray
+            Full-model displacements, shape (n_full,) or (n_full, k).
+
+        Raises
+        ------
+        ValueError
+            When the number of reduced coordinates is wrong.
+        """
         reduced = np.asarray(reduced, dtype=float)
         nb = self.boundary.size
         if reduced.shape[0] != nb + self.omega.size:

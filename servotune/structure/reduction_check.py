@@ -152,7 +152,13 @@ class ReductionCheck:
         return float(np.max(self.compliance_errors, initial=0.0))
 
     def to_dict(self) -> dict:
-        """Plain values for JSON (SI; frequencies in Hz as the names say)."""
+        """Plain values for JSON (SI; frequencies in Hz as the names say).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         worst = int(np.argmax(self.compliance_errors)) if self.ports else None
         return {
             "passed": self.passed, "failures": list(self.failures),

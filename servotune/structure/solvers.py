@@ -75,7 +75,13 @@ _SEED = 20140101  # start vectors are reproducible
 
 
 def pardiso_available() -> bool:
-    """True when the optional ``pypardiso`` package (Intel MKL PARDISO) can be imported."""
+    """Return whether the optional ``pypardiso`` package (Intel MKL PARDISO) can be imported.
+
+    Returns
+    -------
+    bool
+        True when it can be imported.
+    """
     try:
         import pypardiso  # noqa: F401
     except ImportError:
