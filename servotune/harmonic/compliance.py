@@ -1,0 +1,337 @@
+"""Amplitude-dependent compliance of the closed-loop axis with LuGre pads, by harmonic balance.
+
+:func:`nonlinear_compliance` gives, per peak-to-peak work-piece force, the periodic response to
+``F(t) = F_pp/2 cos(w t)`` over a band, followed by continuation
+(:mod:`servotune.harmonic.continuation`) of the multi-harmonic balance
+(:mod:`servotune.harmonic.balance`), standing still or feeding at a constant speed. The
+compliance is the fundamental of the work-piece displacement per force amplitude, as the
+paper's Table 3 (and :meth:`servotune.simulate.SimulationResult.sweep_envelope`) measure it.
+
+Beside it, the linear predictions that bracket it (the paper's remarks A-C in one picture):
+the presliding contact (pads locked by the bristle spring sigma0 and damper sigma1), the
+viscous-only pads ("vd"), the LuGre linearisation about steady sliding at the feed speed, and
+the describing-function prediction (the same balance with the fundamental only, H = 1).
+
+References
+----------
+G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
+sec 4.2, 5.3 (Table 3, remarks A-C).
+M. Krack, J. Gross, "Harmonic Balance for Nonlinear Vibration Problems", Springer (2019).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..frequency import port_compliance
+from ..friction.lugre import sliding_linearisation
+from ..plant import Contact
+from ..units import HZ_PER_RAD_S
+from .aft import samples_from_harmonics
+from .balance import HarmonicSettings, PadBalance
+from .continuation import Branch, ContinuationSettings, continue_in_frequency
+from .linear import pad_receptance
+
+__all__ = ["ComplianceCurve", "NonlinearCompliance", "nonlinear_compliance", "curve_peak",
+           "presliding_guess", "refine_peak", "DEFAULT_BAND"]
+
+DEFAULT_BAND = (2.0 * math.pi * 10.0, 2.0 * math.pi * 100.0)   # the paper's sweep [rad/s]
+
+
+def curve_peak(omega, compliance) -> tuple[float, float, int]:
+    """Peak of a sampled curve: (omega at the peak [rad/s], peak, index of the largest sample).
+
+    A parabola through the largest sample and its two neighbours places the peak between
+    them (when they bracket it).
+
+    Parameters
+    ----------
+    omega, compliance : array_like, shape (K,)
+
+    Returns
+    -------
+    tuple of (float, float, int)
+    """
+    w = np.asarray(omega, dtype=float)
+    c = np.asarray(compliance, dtype=float)
+    i = int(np.argmax(c))
+    if 0 < i < c.size - 1 and w[i - 1] < w[i] < w[i + 1]:
+        c2, c1, c0 = np.polyfit(w[i - 1:i + 2] - w[i], c[i - 1:i + 2], 2)
+        if c2 < 0:
+            dx = -c1 / (2 * c2)
+            if w[i - 1] - w[i] <= dx <= w[i + 1] - w[i]:
+                return float(w[i] + dx), float(c0 - c1 * c1 / (4 * c2)), i
+    return float(w[i]), float(c[i]), i
+
+
+@dataclass(frozen=True, eq=False)
+class ComplianceCurve:
+    """The periodic response at one force level along the band (SI).
+
+    Attributes
+    ----------
+    force_pp : float
+        Work-piece force, peak to peak [N].
+    omega : numpy.ndarray
+        Frequencies of the continuation points [rad/s].
+    compliance : numpy.ndarray
+        Fundamental work-piece displacement per force amplitude [m/N].
+    pad_amplitude : numpy.ndarray
+        Half the peak-to-peak pad displacement (largest pad, all harmonics) [m].
+    resonance : float
+        Frequency of the compliance peak [rad/s].
+    peak : float
+        The compliance peak [m/N].
+    pad_amplitude_at_peak : float
+        Pad amplitude at the peak [m].
+    harmonics : int
+    newton_iterations : int
+    wall_time : float
+        Seconds spent on the curve.
+    """
+
+    force_pp: float
+    omega: np.ndarray
+    compliance: np.ndarray
+    pad_amplitude: np.ndarray
+    resonance: float
+    peak: float
+    pad_amplitude_at_peak: float
+    harmonics: int
+    newton_iterations: int
+    wall_time: float
+
+    def to_dict(self) -> dict:
+        return {"force_pp_n": self.force_pp, "resonance_hz": self.resonance * HZ_PER_RAD_S,
+                "peak_compliance_m_per_n": self.peak,
+                "pad_amplitude_at_peak_m": self.pad_amplitude_at_peak,
+                "harmonics": self.harmonics, "points": int(self.omega.size),
+                "newton_iterations": self.newton_iterations, "wall_time_s": self.wall_time,
+                "frequency_hz": (self.omega * HZ_PER_RAD_S).tolist(),
+                "compliance_m_per_n": self.compliance.tolist(),
+                "pad_amplitude_m": self.pad_amplitude.tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class NonlinearCompliance:
+    """Compliance curves at several force levels with their linear references.
+
+    Attributes
+    ----------
+    speed : float
+        Feed speed [m/s] (0 at rest).
+    curves : tuple of ComplianceCurve
+        Multi-harmonic balance, one per force level.
+    describing : tuple of ComplianceCurve
+        The describing-function prediction (H = 1), one per force level.
+    references : dict
+        ``{name: (omega [rad/s], compliance [m/N])}`` of the linear models.
+    settings : HarmonicSettings
+    """
+
+    speed: float
+    curves: tuple
+    describing: tuple
+    references: dict
+    settings: HarmonicSettings
+    axis: str = ""
+    notes: tuple = field(default=())
+
+    def reference_peaks(self) -> dict:
+        """``{name: (resonance [rad/s], peak [m/N])}`` of the linear references."""
+        return {k: curve_peak(w, c)[:2] for k, (w, c) in self.references.items()}
+
+    def to_dict(self) -> dict:
+        return {
+            "axis": self.axis, "speed_m_per_s": self.speed,
+            "harmonics": self.settings.harmonics, "aft_samples": self.settings.samples,
+            "tolerance": self.settings.tolerance,
+            "curves": [c.to_dict() for c in self.curves],
+            "describing_function": [
+                {"force_pp_n": c.force_pp, "resonance_hz": c.resonance * HZ_PER_RAD_S,
+                 "peak_compliance_m_per_n": c.peak} for c in self.describing],
+            "linear_references": {
+                k: {"resonance_hz": w * HZ_PER_RAD_S, "peak_compliance_m_per_n": p}
+                for k, (w, p) in self.reference_peaks().items()},
+            "notes": list(self.notes)}
+
+    def plot(self):
+        """The family of curves over the linear predictions (matplotlib Figure)."""
+        from .plot import nonlinear_compliance_plot
+
+        return nonlinear_compliance_plot(self)
+
+
+def _pad_amplitudes(balance: PadBalance, branch) -> np.ndarray:
+    out = np.empty(branch.omega.size)
+    for i, y in enumerate(branch.y):
+        x = samples_from_harmonics(balance.complex_of(y), balance.samples)
+        out[i] = 0.5 * float(np.max(x.max(axis=1) - x.min(axis=1)))
+    return out
+
+
+def _compliance(balance: PadBalance, omega, y) -> float:
+    return abs(balance.work_piece(y, omega)[0]) / balance.force_amplitude
+
+
+def refine_peak(balance: PadBalance, branch: Branch, rounds: int = 3) -> Branch:
+    """The branch with up to ``rounds`` more points at the parabola vertex of the compliance
+    around its largest point (fixed-frequency solves started from the neighbours), so that the
+    peak is resolved finer than the continuation steps.
+
+    Parameters
+    ----------
+    balance : PadBalance
+    branch : Branch
+    rounds : int
+
+    Returns
+    -------
+    Branch
+    """
+    w, ys = list(branch.omega), list(branch.y)
+    comp = [_compliance(balance, a, b) for a, b in zip(w, ys, strict=True)]
+    iterations = branch.iterations
+    for _ in range(rounds):
+        vertex, _, i = curve_peak(w, comp)
+        if not 0 < i < len(w) - 1 or abs(vertex - w[i]) <= 1e-5 * w[i]:
+            break
+        j = i + 1 if vertex > w[i] else i - 1
+        lam = (vertex - w[i]) / (w[j] - w[i])
+        y, n_it = balance.solve(vertex, (1 - lam) * ys[i] + lam * ys[j])
+        iterations += n_it
+        k = max(i, j)
+        w.insert(k, vertex)
+        ys.insert(k, y)
+        comp.insert(k, _compliance(balance, vertex, y))
+    return Branch(omega=np.array(w), y=np.array(ys), iterations=iterations,
+                  rejected=branch.rejected)
+
+
+def _curve(balance: PadBalance, band, continuation, y0=None) -> ComplianceCurve:
+    t0 = time.perf_counter()
+    branch = continue_in_frequency(balance, band[0], band[1], continuation, y0=y0)
+    branch = refine_peak(balance, branch)
+    comp = np.array([_compliance(balance, w, y) for w, y in zip(branch.omega, branch.y,
+                                                                  strict=True)])
+    pads = _pad_amplitudes(balance, branch)
+    res, peak, i = curve_peak(branch.omega, comp)
+    return ComplianceCurve(force_pp=2.0 * balance.force_amplitude, omega=branch.omega,
+                           compliance=comp, pad_amplitude=pads, resonance=res, peak=peak,
+                           pad_amplitude_at_peak=float(pads[i]),
+                           harmonics=balance.harmonics, newton_iterations=branch.iterations,
+                           wall_time=time.perf_counter() - t0)
+
+
+def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
+    """Start of the balance at rest: the pads on the presliding contact (spring sigma0,
+    damper sigma1 + sigma2, shared by the pads), fundamental only.
+
+    Parameters
+    ----------
+    balance : PadBalance
+    omega : float
+        Angular frequency [rad/s].
+    params : LuGreParameters
+        Axis-total friction.
+
+    Returns
+    -------
+    numpy.ndarray
+        The real unknowns of ``balance``.
+    """
+    n = balance.n_pads
+    g = balance.receptance(np.array([omega]))[:, :, 0]
+    z = (params.sigma0 + 1j * omega * (params.sigma1 + params.sigma2)) / n
+    x = np.linalg.solve(np.eye(n) + g[:n, :n] * z, g[:n, n] * balance.force_amplitude)
+    h = np.zeros((n, balance.harmonics), dtype=complex)
+    h[:, 0] = x
+    return balance.real_of(h)
+
+
+def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND,
+                         settings: HarmonicSettings | None = None,
+                         continuation: ContinuationSettings | None = None, law=None,
+                         references: bool = True, describing: bool = True,
+                         progress=None) -> NonlinearCompliance:
+    """Compliance curves of the axis with nonlinear guide-way friction at force levels.
+
+    Parameters
+    ----------
+    setup : servotune.simulate.setup.AxisSetup
+        Structure, drive, pads and friction of the axis (:func:`~servotune.simulate.setup.
+        axis_setup`).
+    forces_pp : sequence of float
+        Work-piece force levels, peak to peak [N].
+    speed : float
+        Feed speed [m/s] (0: at rest; the pads slide on average at this speed).
+    band : (float, float)
+        Frequency band [rad/s] (default 10-100 Hz, the paper's sweep).
+    settings : HarmonicSettings, optional
+        Harmonics, AFT samples, tolerance (default 9 harmonics, 256 samples).
+    continuation : ContinuationSettings, optional
+    law : object, optional
+        The pad friction law (axis totals), default LuGre of ``setup``; any law with
+        ``periodic_force`` (see :func:`~servotune.harmonic.aft.periodic_friction_force`).
+    references : bool
+        Also the linear references (presliding, viscous-only, sliding at ``speed``).
+    describing : bool
+        Also the describing-function curves (H = 1).
+    progress : callable, optional
+        Called with the number of curves done.
+
+    Returns
+    -------
+    NonlinearCompliance
+
+    Raises
+    ------
+    ValueError
+        If a force level or the speed is not valid.
+    ConvergenceError
+        If a branch cannot be followed.
+
+    See Also
+    --------
+    servotune.simulate.simulate : the time simulation that checks it.
+    """
+    from ..simulate.contact import LuGreFriction
+
+    forces = [float(f) for f in np.atleast_1d(forces_pp)]
+    if not forces or not all(math.isfinite(f) and f > 0 for f in forces):
+        raise ValueError(f"force levels must be finite and > 0 N peak to peak, got {forces_pp!r}")
+    speed = float(speed)
+    if not (math.isfinite(speed) and speed >= 0.0):
+        raise ValueError(f"the feed speed must be finite and >= 0 m/s, got {speed!r}")
+    settings = settings or HarmonicSettings()
+    law = LuGreFriction(setup.lugre) if law is None else law
+    rec = pad_receptance(setup.structure, setup.drive, setup.pads)
+    curves, df = [], []
+    for j, fpp in enumerate(forces):
+        for h, out in ((settings.harmonics, curves), (1, df)):
+            if h == 1 and not describing:
+                continue
+            s = dataclasses.replace(settings, harmonics=h, samples=None) if h == 1 else settings
+            bal = PadBalance(rec, law, 0.5 * fpp, speed, s)
+            y0 = presliding_guess(bal, band[0], setup.lugre) if speed == 0.0 else None
+            out.append(_curve(bal, band, continuation, y0))
+        if progress is not None:
+            progress(j + 1)
+    refs = {}
+    if references:
+        omega = np.linspace(band[0], band[1], 901)
+        p = setup.lugre
+        models = {"presliding": Contact.stiction(p.sigma0, p.sigma1, p.sigma2),
+                  "viscous": Contact.viscous(setup.viscous)}
+        if speed > 0.0:
+            models["sliding"] = Contact.sliding(sliding_linearisation(p, speed), speed)
+        for name, contact in models.items():
+            refs[name] = (omega, np.abs(port_compliance(setup.structure, omega, setup.drive,
+                                                        contact, setup.pads)[0]))
+    return NonlinearCompliance(speed=speed, curves=tuple(curves), describing=tuple(df),
+                               references=refs, settings=settings, axis=setup.name)
