@@ -122,7 +122,13 @@ def handling(silence_native_stderr: bool = False) -> Iterator[None]:
 
 
 def requested() -> bool:
-    """Whether Ctrl-C was pressed since :func:`handling` was entered (or :func:`clear`)."""
+    """Return whether Ctrl-C was pressed since :func:`handling` was entered (or :func:`clear`).
+
+    Returns
+    -------
+    bool
+        True after a Ctrl-C.
+    """
     return _flag.is_set()
 
 

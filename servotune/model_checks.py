@@ -104,7 +104,13 @@ class TransmissionCheck:
     message: str
 
     def to_dict(self) -> dict:
-        """Plain values for JSON (SI)."""
+        """Plain values for JSON (SI).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"rotor": self.rotor, "stator": self.stator, "encoder": self.encoder,
                 "feedback": self.feedback, "drive_ratio": self.drive_ratio,
                 "structure_ratio": self.structure_ratio,
@@ -323,7 +329,12 @@ class AxisModelChecks:
         return () if self.coverage.covered else (f"band coverage: {self.coverage.message}",)
 
     def require(self) -> AxisModelChecks:
-        """These checks, or :class:`ModelCheckError` when one of them is an error.
+        """Return these checks, or raise ModelCheckError when one of them is an error.
+
+        Returns
+        -------
+        AxisModelChecks
+            These checks (self), when none is an error.
 
         Raises
         ------
@@ -336,7 +347,13 @@ class AxisModelChecks:
         return self
 
     def to_dict(self) -> dict:
-        """Plain values for JSON (SI)."""
+        """Plain values for JSON (SI).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"transmission": None if self.transmission is None
                 else self.transmission.to_dict(),
                 "band_coverage": self.coverage.to_dict(),

@@ -70,7 +70,13 @@ def reporting(enabled: bool = True, stream=None) -> Iterator[None]:
 
 
 def enabled() -> bool:
-    """Whether tasks started now show a bar."""
+    """Return whether tasks started now show a bar.
+
+    Returns
+    -------
+    bool
+        True when bars are shown.
+    """
     return _enabled.get()
 
 
@@ -93,7 +99,13 @@ class Task:
         self._bar = bar
 
     def update(self, n=1) -> None:
-        """``n`` more steps done."""
+        """Report ``n`` more steps done.
+
+        Parameters
+        ----------
+        n : int or float, optional
+            The increment (default 1).
+        """
         self.done += n
         if self._bar is not None:
             self._bar.update(n)
@@ -185,8 +197,15 @@ def task(description: str, total=None, unit: str = "") -> Iterator[Task]:
 
 
 def current() -> str | None:
-    """The innermost task running now, or the one the last Ctrl-C inside the
-    :func:`reporting` block interrupted, as words with its progress (None when idle)."""
+    """Return the innermost task running now, as words with its progress.
+
+    Or the one the last Ctrl-C inside the :func:`reporting` block interrupted.
+
+    Returns
+    -------
+    str or None
+        The task's description and progress, None when idle.
+    """
     active = _active.get()
     if active:
         return str(active[-1])

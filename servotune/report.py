@@ -163,12 +163,34 @@ def write_json(path, obj, force: bool = False) -> Path:
 
 
 def default_folder(name: str) -> Path:
-    """``out/<name>`` under the current folder."""
+    """Return ``out/<name>`` under the current folder.
+
+    Parameters
+    ----------
+    name : str
+        The folder's name.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out/<name>`` (relative).
+    """
     return Path("out") / name
 
 
 def tuning_figures(job) -> list[tuple[str, str, object]]:
-    """The figures of a tuning job as (file name, title, matplotlib figure)."""
+    """Return the figures of a tuning job as (file name, title, matplotlib figure).
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    list of (str, str, matplotlib.figure.Figure)
+        (file name, title, figure) of each figure the job has data for.
+    """
     from . import plots
 
     name = job.axis.name

@@ -52,7 +52,18 @@ def _f(value, fmt="{:.4g}", none="-", inf="unstable"):
 
 
 def inputs_table(job) -> Table:
-    """The inputs and requirements the design answers to."""
+    """Return the inputs and requirements the design answers to.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table
+        The axis, the drive, the regimes and the requirements.
+    """
     axis, problem = job.axis, job.result.problem
     req = problem.requirements
     rows = [("axis", axis.name, axis.description)]
@@ -95,7 +106,18 @@ def inputs_table(job) -> Table:
 
 
 def design_table(job) -> Table:
-    """The design variables and the worst claimed compliance, before and after."""
+    """Return the design variables and the worst claimed compliance, before and after.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table
+        C, Kv, Kp, Ti and the worst claimed compliance peak, before and after.
+    """
     r = job.result
     d0, d1 = r.initial, r.design
     rows = [("C guide ways [N s/m]", _f(d0.c), _f(d1.c))]
@@ -137,7 +159,18 @@ def design_table(job) -> Table:
 
 
 def regimes_table(job) -> Table:
-    """Regime by regime: the claim, the nonlinear axis before and after, the improvement."""
+    """Return, regime by regime, the claim, the nonlinear axis before and after, the improvement.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table
+        One row per regime.
+    """
     rows = []
     verdict = job.verdict
     if verdict is not None and verdict.regimes:
@@ -177,7 +210,18 @@ def _linear_claims(job):
 
 
 def loops_table(job) -> Table | None:
-    """Both loops of the reference model (where the axis moves), before and after."""
+    """Return both loops of the reference model (where the axis moves), before and after.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table or None
+        Margins, Ms and bandwidths of the velocity and position loops; None without a drive.
+    """
     r = job.result
     if r.problem.drive is None:
         return None
@@ -219,7 +263,18 @@ def loops_table(job) -> Table | None:
 
 
 def thrust_table(job) -> Table | None:
-    """Thrust needed against thrust available, term by term, for the tuned design."""
+    """Return the thrust needed against the thrust available, term by term, for the tuned design.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table or None
+        One row per load case [kN]; None without a thrust budget.
+    """
     t = job.thrust_after
     if t is None:
         return None
@@ -238,7 +293,18 @@ def thrust_table(job) -> Table | None:
 
 
 def realisation_table(job) -> Table | None:
-    """What could build the tuned C, its cost, whether the budget holds."""
+    """Return what could build the tuned C, its cost, and whether the budget holds.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table or None
+        One row per option; None when the job has none.
+    """
     if not job.c_realisation:
         return None
     rows = []
@@ -254,7 +320,21 @@ def realisation_table(job) -> Table | None:
 
 
 def verdict_lines(job) -> tuple[str, tuple[str, ...]]:
-    """The verdict line (label and what it means) and what was checked or not."""
+    """Return the verdict line (label and what it means) and what was checked or not.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    head : str
+        The verdict line: VERIFIED, NOT VERIFIED (linear check only) or NOT VERIFIED with the
+        reasons.
+    lines : tuple of str
+        What the nonlinear verification checked and did not check (empty without it).
+    """
     status = job.status
     r = job.result
     if status == "verified" and job.verdict.nonlinear_holds is None:
@@ -312,7 +392,18 @@ def text(table: Table | None, widths=None) -> str:
 
 
 def html_table(table: Table | None) -> str:
-    """A table as HTML (cells escaped)."""
+    """Return a table as HTML (cells escaped).
+
+    Parameters
+    ----------
+    table : Table or None
+        The table.
+
+    Returns
+    -------
+    str
+        An HTML table with its title and notes; "" for None.
+    """
     if table is None:
         return ""
     esc = _html.escape

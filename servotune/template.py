@@ -25,12 +25,21 @@ RATIO = 10e-3 / (2 * math.pi)  # 10 mm lead, direct drive [m/rad]
 
 
 def template_structure() -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """Mass, stiffness and DOF names of the template's lumped feed axis (SI).
+    """Return mass, stiffness and DOF names of the template's lumped feed axis (SI).
 
     Motor rotor 0.012 kg m^2 on a torsional bracket (stator 0.03 kg m^2, 2e5 N m/rad);
     ball screw, nut and bearings 3e8 N/m between r * rotor angle and the slide (r = 10 mm
     lead / 2 pi); slide 800 kg in two halves at the pads (2e9 N/m between them); encoder head
     2 kg on 5e8 N/m; table, fixture and work piece 300 kg on 1.5e8 N/m.
+
+    Returns
+    -------
+    mass : numpy.ndarray
+        Mass matrix [kg, kg m^2].
+    stiffness : numpy.ndarray
+        Stiffness matrix [N/m, N m/rad].
+    dofs : list of str
+        The DOF names.
     """
     dofs = ["motor.rotor", "motor.stator", "pad1.x", "pad2.x", "encoder.x", "wp.x"]
     idx = {d: i for i, d in enumerate(dofs)}
@@ -188,7 +197,18 @@ chatter_weight = 0.0                # 0: compliance peak only; 1: chatter limit 
 
 
 def axis_name_for(folder) -> str:
-    """The axis name ``init`` gives a folder: its name, in letters, digits and ``_ . -``.
+    """Return the axis name ``init`` gives a folder: its name, in letters, digits and ``_ . -``.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The axis folder.
+
+    Returns
+    -------
+    str
+        The folder's name (of its resolved path) with every run of other characters replaced
+        by ``_`` and ``. _ -`` stripped from the ends; ``"my_axis"`` when nothing is left.
 
     Examples
     --------
@@ -204,7 +224,18 @@ def axis_name_for(folder) -> str:
 
 
 def template_toml(name: str = "my_axis") -> str:
-    """The commented ``axis.toml`` of the starter axis, with ``[axis] name`` = ``name``."""
+    """Return the commented ``axis.toml`` of the starter axis, with ``[axis] name`` = ``name``.
+
+    Parameters
+    ----------
+    name : str, optional
+        The axis name (default "my_axis").
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
     if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
         raise ValueError(f"axis name {name!r}: use letters, digits and _ . - only")
     return _TEMPLATE.replace("{AXIS_NAME}", name).replace(

@@ -135,7 +135,13 @@ class ThrustCase:
         return self.needed / self.available
 
     def to_dict(self) -> dict:
-        """Return the case as a JSON-ready dictionary (forces in N, speed in m/s)."""
+        """Return the case as a JSON-ready dictionary (forces in N, speed in m/s).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"name": self.name, "speed_m_per_s": self.speed, "thrust": self.thrust_kind,
                 "available_n": self.available, "usable_n": self.usable,
                 "needed_n": self.needed, "fits": self.fits,
@@ -213,16 +219,28 @@ class ThrustBudget:
         return tuple(out)
 
     def linear_form(self) -> tuple[tuple[float, float, float, str], ...]:
-        """Each case as ``fixed + c * speed <= usable`` (fixed [N], speed [m/s], usable [N],
-        name): the form the tuning constrains."""
+        """Return each case as ``fixed + c * speed <= usable``, the form the tuning constrains.
+
+        Returns
+        -------
+        tuple of (float, float, float, str)
+            (fixed [N], speed [m/s], usable [N], name) per case, in the order of :meth:`cases`.
+        """
         out = []
         for case in self.cases(0.0):
             out.append((case.needed, case.speed, case.usable, case.name))
         return tuple(out)
 
     def c_max(self) -> float:
-        """The largest total viscous damping [N s/m] every case allows (inf when no case has a
-        speed); negative when even C = 0 does not fit."""
+        """Return the largest total viscous damping [N s/m] every case allows.
+
+        ``inf`` when no case has a speed; negative when even C = 0 does not fit.
+
+        Returns
+        -------
+        float
+            C_max [N s/m].
+        """
         limits = [(usable - fixed) / speed for fixed, speed, usable, _ in self.linear_form()
                   if speed > 0]
         return min(limits) if limits else math.inf
@@ -301,7 +319,13 @@ class CRealisation:
     fits_thrust: bool | None = None      # the thrust budget alone (None: no torque limits)
 
     def to_dict(self) -> dict:
-        """Return the option as a JSON-ready dictionary of its fields (SI)."""
+        """Return the option as a JSON-ready dictionary of its fields (SI).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return dataclasses.asdict(self)
 
 

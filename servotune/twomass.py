@@ -197,6 +197,11 @@ def two_mass_compliance(system: TwoMassSystem, omega, c) -> np.ndarray:
 def fixed_points(system: TwoMassSystem) -> np.ndarray:
     """Angular frequencies [rad/s] where |x2/f2| does not depend on C (paper, Eq 2-3).
 
+    Parameters
+    ----------
+    system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
+
     Returns
     -------
     numpy.ndarray
@@ -280,6 +285,16 @@ def g_alpha(alpha) -> np.ndarray:
     ``g(alpha) = (1 - alpha + sqrt(1 + alpha^2)) / alpha``, so that the optimal peak
     compliance is g(alpha)/K (the paper's Fig 4).
 
+    Parameters
+    ----------
+    alpha : array_like
+        Mass ratio M2/M1 [-], > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        g(alpha) [-], shape of ``alpha``.
+
     Examples
     --------
     Equal masses leave an amplification of sqrt(2):
@@ -294,9 +309,19 @@ def g_alpha(alpha) -> np.ndarray:
 
 
 def optimal_peak(system: TwoMassSystem) -> float:
-    """The peak |x2/f2| [m/N] reached with C = Copt: the compliance at the fixed point.
+    """Return the peak |x2/f2| [m/N] reached with C = Copt: the compliance at the fixed point.
 
     Layout B: g(alpha)/K (paper, Eq 7). Layout A: (1 + 2 alpha)/K.
+
+    Parameters
+    ----------
+    system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
+
+    Returns
+    -------
+    float
+        The peak compliance [m/N].
 
     Examples
     --------
@@ -311,6 +336,11 @@ def optimal_peak(system: TwoMassSystem) -> float:
 
 def limit_resonances(system: TwoMassSystem) -> tuple[float, float]:
     """Undamped resonance [rad/s] that moves the work piece for C -> 0 and for C -> infinity.
+
+    Parameters
+    ----------
+    system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
 
     Returns
     -------
@@ -456,7 +486,13 @@ class TwoMassAnalysis:
     resonance_cinf: float
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary, SI values; frequencies also in Hz under ``*_hz`` keys."""
+        """JSON-ready dictionary, SI values; frequencies also in Hz under ``*_hz`` keys.
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         hz = 1.0 / (2.0 * math.pi)
         return {
             "layout": self.system.layout,
@@ -507,7 +543,17 @@ class TwoMassAnalysis:
 
 
 def analyse_two_mass(system: TwoMassSystem) -> TwoMassAnalysis:
-    """Fixed points, Copt, optimal peak and limit resonances of a two-mass system.
+    """Return the fixed points, Copt, optimal peak and limit resonances of a two-mass system.
+
+    Parameters
+    ----------
+    system : TwoMassSystem
+        The two-mass system (M1, K, alpha, layout).
+
+    Returns
+    -------
+    TwoMassAnalysis
+        The closed-form results of sec 4.1.
 
     Examples
     --------

@@ -22,8 +22,8 @@ import sys
 __all__ = ["main", "build_parser", "COMMANDS", "SUMMARIES"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("init", "twomass", "modes", "check", "friction", "bode", "compliance", "lobes", "tune",
-            "table3", "verify", "study")
+COMMANDS = ("init", "twomass", "modes", "check", "friction", "bode", "compliance", "nlcompliance",
+            "lobes", "tune", "table3", "verify", "study")
 
 # one line per subcommand for ``servotune --help`` without importing every module (a command
 # missing here is imported to list it); tests/test_cli.py checks them against the modules
@@ -37,6 +37,8 @@ SUMMARIES = {
     "friction": "LuGre friction: equivalent damping (Eq 8-10), figures, fits",
     "bode": "loop transfer functions of the velocity and position loops, with margins",
     "compliance": "work-piece X compliance with a guide-way contact model (Fig 9)",
+    "nlcompliance": "amplitude-dependent compliance with LuGre pads by harmonic balance "
+                    "(Table 3, A-C)",
     "lobes": "chatter stability lobes, b_crit and the chatter margin (sec 2)",
     "tune": "tune guide-way damping C, Kv and the velocity PI (casadi), verify",
     "table3": "simulate the paper's Table 3 (sine sweeps with LuGre friction)",
@@ -52,13 +54,18 @@ def _module(name: str):
 
 
 def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
-    """The argument parser.
+    """Return the argument parser.
 
     Parameters
     ----------
     command : str or None
         ``"*"`` (default) registers every subcommand in full; a subcommand name registers that
         one in full and lists the others by name and summary only (fast); None lists all.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``servotune`` parser with its sub-commands.
     """
     from .. import __version__
 

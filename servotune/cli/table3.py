@@ -28,7 +28,13 @@ _FREQUENCY = number(0.0, 1e4, low_open=True, example=10, unit="Hz")
 
 
 def default_axis() -> Path:
-    """The bundled paper axis, ``models/paper_x_axis`` of the source tree."""
+    """Return the bundled paper axis, ``models/paper_x_axis`` of the source tree.
+
+    Returns
+    -------
+    pathlib.Path
+        Its folder.
+    """
     return Path(__file__).resolve().parents[2] / "models" / "paper_x_axis"
 
 

@@ -97,7 +97,18 @@ def add_parser(subparsers) -> None:
 
 
 def exit_status(job) -> int:
-    """The documented exit status of a tuning job."""
+    """Return the documented exit status of a tuning job.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job.
+
+    Returns
+    -------
+    int
+        0 verified, 3 when only the linear checks were made and hold, else 1.
+    """
     if job.verified:
         return EXIT_VERIFIED
     if job.status == "linear only":

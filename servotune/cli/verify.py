@@ -48,7 +48,19 @@ FREQUENCY = number(0.0, 1e5, low_open=True, example=50, unit="Hz")
 
 
 def read_result(path) -> tuple[Path, dict]:
-    """The axis folder and the design of a tuning results file.
+    """Return the axis folder and the design of a tuning results file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``results.json`` that ``servotune tune`` wrote.
+
+    Returns
+    -------
+    axis : pathlib.Path
+        The axis folder.
+    design : dict
+        The design: ``c``, ``kv``, ``kp``, ``ti`` [SI].
 
     Raises
     ------

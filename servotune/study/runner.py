@@ -60,7 +60,13 @@ class StudyRun:
         return self.computed / self.wall_time if self.wall_time > 0 else 0.0
 
     def to_dict(self) -> dict:
-        """Return the run as a JSON-ready dictionary (the folder as a string, times in s)."""
+        """Return the run as a JSON-ready dictionary (the folder as a string, times in s).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         d = dataclasses.asdict(self)
         d["folder"] = str(self.folder)
         d["wall_time_s"] = d.pop("wall_time")

@@ -75,7 +75,18 @@ class Variation:
         return self.distribution is not None
 
     def draw(self, rng: np.random.Generator) -> float:
-        """One random value of this variation."""
+        """Return one random value of this variation.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The generator of this draw.
+
+        Returns
+        -------
+        float
+            A value of the variation's distribution.
+        """
         p = dict(self.parameters)
         d = self.distribution
         if d == "uniform":
@@ -91,7 +102,13 @@ class Variation:
         raise AssertionError(d)
 
     def to_dict(self) -> dict:
-        """Return the variation as a JSON-ready dictionary."""
+        """Return the variation as a JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"path": self.path, "values": list(self.values),
                 "distribution": self.distribution, "parameters": dict(self.parameters),
                 "relative": self.relative}
@@ -107,7 +124,13 @@ class Sample:
     key: str = ""
 
     def to_dict(self) -> dict:
-        """Return the sample as a JSON-ready dictionary (the values keyed by path)."""
+        """Return the sample as a JSON-ready dictionary (the values keyed by path).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"sample_id": self.sample_id, "axis": self.axis, "values": dict(self.values),
                 "key": self.key}
 
@@ -130,8 +153,16 @@ class Study:
     tables: dict = field(default_factory=dict, compare=False, repr=False)
 
     def sample_list(self) -> list[Sample]:
-        """Every sample, in a stable order; random values from ``default_rng([seed, i])``
-        for the i-th draw, so a sample does not change when others are added."""
+        """Return every sample, in a stable order.
+
+        Random values come from ``default_rng([seed, i])`` for the i-th draw, so a sample does not
+        change when others are added.
+
+        Returns
+        -------
+        list of Sample
+            One sample per axis, grid point of the fixed variations and random draw.
+        """
         fixed = [v for v in self.variations if not v.random]
         random = [v for v in self.variations if v.random]
         draws = self.samples if random else 1
@@ -163,7 +194,13 @@ class Study:
         return any(v.relative for v in self.variations if v.path == path)
 
     def to_dict(self) -> dict:
-        """Return the study's settings as a JSON-ready dictionary (not its tables)."""
+        """Return the study's settings as a JSON-ready dictionary (not its tables).
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"name": self.name, "file": str(self.file), "axes": list(self.axes),
                 "variations": [v.to_dict() for v in self.variations],
                 "compute": list(self.compute), "samples": self.samples, "seed": self.seed,
@@ -269,6 +306,16 @@ def _variation(path: str, table, file) -> Variation:
 
 def load_study(path) -> Study:
     """Read and check a study file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The study's TOML file.
+
+    Returns
+    -------
+    Study
+        The parsed, validated study.
 
     Raises
     ------

@@ -43,7 +43,13 @@ class StudySummary:
         return None if self.verified is None or not self.done else self.verified / self.done
 
     def to_dict(self) -> dict:
-        """Return the summary as a JSON-ready dictionary."""
+        """Return the summary as a JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            JSON-ready values (SI; str, numbers, lists, None).
+        """
         return {"samples": self.samples, "done": self.done, "failed": self.failed,
                 "verified": self.verified, "verified_share": self.verified_share,
                 "spreads": self.spreads,
