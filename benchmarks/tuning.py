@@ -426,7 +426,7 @@ def main(argv=None):
                                  time_in_own_verification_s=spent["verify_s"],
                                  time_optimisation_s=t_casadi - spent["verify_s"],
                                  success=result.success,
-                                 reasons=list(result.reasons), stats=result.stats,
+                                 reasons=list(result.reasons), stats=result.stats.to_dict(),
                                  objective_on_scipy_grid=target,
                                  feasible_on_scipy_grid=bool(casadi_on_grid[2] and np.all(
                                      casadi_on_grid[1] >= 1 - 1e-9)))

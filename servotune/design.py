@@ -26,7 +26,7 @@ from .frequency import port_compliance
 from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
-from .tuning import ChatterTarget, Design, TuningProblem, TuningResult, tune
+from .tuning import ChatterTarget, Design, TuningProblem, TuningResult, TuningStatistics, tune
 from .units import HZ_PER_RAD_S
 
 __all__ = [
@@ -402,8 +402,8 @@ class AxisTuning:
             "process": self.process,
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
             "active_constraints": list(r.active),
-            "solver": r.stats,
-            "predicted": r.predicted,
+            "solver": r.stats.to_dict(),
+            "predicted": None if r.predicted is None else r.predicted.to_dict(),
             "c_opt_analytic": (self.two_mass.c_opt_analytic
                                if self.two_mass is not None and self.result.problem.drive is None
                                else None),
@@ -499,10 +499,13 @@ def check_design(axis: Axis, design: Design, simulate_before: bool = True,
     checks = requirement_checks(problem, design, after, current_bw)
     reasons = tuple(f"verification: {c.text}" for c in checks if not c.holds)
     return TuningResult(problem=problem, initial=x0, design=design, before=before, after=after,
-                        predicted={}, success=not reasons, reasons=reasons, active=(),
-                        stats={"starts": 0, "iterations": 0, "exchange_rounds": 0,
-                               "models": len(problem.regimes),
-                               "time_s": time.perf_counter() - t0},
+                        predicted=None, success=not reasons, reasons=reasons, active=(),
+                        stats=TuningStatistics(
+                            starts=0, polished=0, iterations=0, exchange_rounds=0,
+                            grid_points=0, models=len(problem.regimes), return_status=None,
+                            current_loop_bandwidth_hz=(None if current_bw is None
+                                                       else current_bw * HZ_PER_RAD_S),
+                            time_s=time.perf_counter() - t0),
                         checks=checks)
 
 

@@ -355,9 +355,9 @@ budget and a nonlinear verdict. SI units; frequencies in Hz.</p>
 {two}
 <h2>Figures</h2>
 {figs}
-<p>Solver: {r.stats["starts"]} starts, {r.stats["iterations"]} IPOPT iterations,
-{r.stats["exchange_rounds"]} grid-exchange rounds, {r.stats["models"]} regime models,
-{r.stats["time_s"]:.1f} s.</p>
+<p>Solver: {r.stats.starts} starts, {r.stats.iterations} IPOPT iterations,
+{r.stats.exchange_rounds} grid-exchange rounds, {r.stats.models} regime models,
+{r.stats.time_s:.1f} s.</p>
 """)
 
 

@@ -255,8 +255,8 @@ def loops_table(job) -> Table | None:
     notes += [c.text for c in r.checks if c.requirement in (
         "loop hierarchy", "Ti and velocity bandwidth", "current loop above")
         and c.model == ref]
-    if r.stats.get("current_loop_bandwidth_hz"):
-        notes.append(f"current loop bandwidth {r.stats['current_loop_bandwidth_hz']:.4g} Hz "
+    if r.stats.current_loop_bandwidth_hz:
+        notes.append(f"current loop bandwidth {r.stats.current_loop_bandwidth_hz:.4g} Hz "
                      "(rotor held)")
     return Table(f"Loops ({ref or 'reference model'}; margins include the drive's delays)",
                  ("", "before", "after"), tuple(rows), tuple(notes))

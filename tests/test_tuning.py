@@ -227,8 +227,8 @@ def test_hessian_given_to_ipopt_matches_finite_differences_of_the_port_model(act
     current_bw = 2 * np.pi * 700.0
     gates = gate_parameters(problem, np.array([1.3, 1.1]), current_bw)
     solver = Solver(problem, Kernels(problem, h0, s0), 7, 9)
-    params = np.concatenate([band_model.data.rows(models=[0, 1]).ravel(order="F"),
-                             loop_model.data.rows(gates).ravel(order="F")])
+    params = solver.parameters(band_model.data.rows(models=[0, 1]),
+                               loop_model.data.rows(gates))
     groups = np.array(solver.groups)
     rng = np.random.default_rng(7)
     lam_g = rng.uniform(0.2, 1.0, groups.size)
@@ -274,3 +274,58 @@ def test_hessian_given_to_ipopt_matches_finite_differences_of_the_port_model(act
     # central differences: truncation ~ step^2 = 1e-8 relative, round-off ~ 1e-16/step^2
     assert_allclose(exact, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
     assert np.abs(fd).max() > 0
+
+
+def test_a_solver_with_unused_grid_slots_finds_the_same_optimum_as_one_of_exact_size():
+    # One solver serves every round of the grid exchange: grids smaller than its capacity are
+    # padded and the padded constraints switched off by a mask. The reference is the NLP built
+    # for exactly the grid's size: same design, objective and active constraints.
+    from servotune.tuning.nlp import Kernels, Solver, gate_parameters
+    from servotune.tuning.solve import _scale_factors
+
+    structure, drive = small_axis(), small_drive()
+    req = Requirements(ms_velocity_max=1.6, ms_position_max=1.3, kv_min=10.0)
+    problem = TuningProblem(structure, PADS, c=5e4, drive=drive,
+                            free=("c", "kv", "kp", "ti"), requirements=req)
+    x0 = problem.initial_design()
+    kernels = Kernels(problem, *_scale_factors(problem, x0))
+    band = ResponseModel(problem, np.geomspace(*req.band, 40))
+    loop = ResponseModel(problem, np.geomspace(*req.loop_band, 50))
+    gates = gate_parameters(problem, np.ones(len(problem.regimes)), None)
+    band_rows = band.data.rows(models=list(problem.cutting_models))
+    loop_rows = loop.data.rows(gates)
+    exact = Solver(problem, kernels, 40, 50).solve(x0, band_rows, loop_rows)
+    padded_solver = Solver(problem, kernels, 40 + 13, 50 + 29)
+    padded = padded_solver.solve(x0, band_rows, loop_rows)
+    assert exact.converged and padded.converged
+    assert padded.objective == pytest.approx(exact.objective, rel=1e-8)
+    for v in problem.free:
+        assert getattr(padded.design, v) == pytest.approx(getattr(exact.design, v), rel=1e-6)
+    # the unused slots have no key and carry no multiplier
+    keys = padded_solver.row_keys(band.omega, loop.omega)
+    unused = [i for i, k in enumerate(keys) if k is None]
+    assert len(unused) == 13 * len(problem.cutting_models) * len(kernels.band_rows) \
+        + 29 * len(problem.regimes) * len(kernels.loop_rows)
+    assert np.abs(padded.multipliers[1][unused]).max() < 1e-8
+
+
+def test_an_iteration_limit_per_solve_stops_ipopt_there():
+    from servotune.tuning.nlp import Kernels, Solver, gate_parameters
+    from servotune.tuning.solve import _scale_factors
+
+    structure, drive = small_axis(), small_drive()
+    problem = TuningProblem(structure, PADS, c=5e4, drive=drive, free=("c", "kv", "kp", "ti"),
+                            requirements=Requirements())
+    x0 = problem.initial_design()
+    kernels = Kernels(problem, *_scale_factors(problem, x0))
+    band = ResponseModel(problem, np.geomspace(*problem.requirements.band, 30))
+    loop = ResponseModel(problem, np.geomspace(*problem.requirements.loop_band, 30))
+    rows = (band.data.rows(models=list(problem.cutting_models)),
+            loop.data.rows(gate_parameters(problem, np.ones(len(problem.regimes)), None)))
+    solver = Solver(problem, kernels, 30, 30)
+    full = solver.solve(x0, *rows)
+    assert full.converged and full.stats["iter_count"] > 5
+    cut = solver.solve(x0, *rows, max_iter=3)
+    assert not cut.converged and cut.stats["iter_count"] == 3
+    again = solver.solve(x0, *rows)          # the limit holds for one solve only
+    assert again.converged and again.stats["iter_count"] == full.stats["iter_count"]

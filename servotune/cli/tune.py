@@ -196,9 +196,9 @@ def run(args) -> int:
         print_json(results)
         return status
     r = job.result
-    print(f"{axis.name}: tuned {', '.join(r.problem.free)} over {r.stats['models']} regime "
-          f"models ({r.stats['starts']} starts, {r.stats['iterations']} IPOPT iterations, "
-          f"{r.stats['time_s']:.1f} s)")
+    print(f"{axis.name}: tuned {', '.join(r.problem.free)} over {r.stats.models} regime "
+          f"models ({r.stats.starts} starts, {r.stats.iterations} IPOPT iterations, "
+          f"{r.stats.time_s:.1f} s)")
     for line in notes:
         print(f"  note: {line}")
     for line in checks.warnings:

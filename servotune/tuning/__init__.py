@@ -63,7 +63,7 @@ from .problem import (
     TuningDidNotConvergeError,
     TuningProblem,
 )
-from .solve import TuningResult, tune
+from .solve import Prediction, TuningResult, TuningStatistics, tune
 from .verify import ModelPerformance, Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = [
@@ -72,6 +72,7 @@ __all__ = [
     "ModelPerformance",
     "NoStableStartError",
     "Performance",
+    "Prediction",
     "RequirementCheck",
     "Requirements",
     "RequirementsNotMetError",
@@ -79,6 +80,7 @@ __all__ = [
     "ResponseModel",
     "TuningProblem",
     "TuningResult",
+    "TuningStatistics",
     "evaluate",
     "requirement_checks",
     "tune",

@@ -55,7 +55,7 @@ from .ports import SymbolicPorts, responses
 from .problem import VARIABLES, Design, TuningProblem
 
 __all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "GATE_ROWS", "Kernels", "Solver", "Solution",
-           "gate_parameters", "jit_options"]
+           "gate_parameters", "jit_options", "cache_folder"]
 
 #: kappa of the logistic gates (per unit of log frequency): 5 % past an edge the gate is
 #: 82 % open, 10 % past it 95 %.
@@ -98,11 +98,22 @@ N_GATE_PARAMS = 8
 
 def jit_options() -> dict:
     """casadi options that compile the per-frequency kernels to C (about three times faster
-    than casadi's virtual machine; half a second to compile each), when a C compiler is found
-    (``$CC``, ``cc`` or ``gcc``) and ``SERVOTUNE_JIT`` is not ``0``; else none (the kernels
-    are interpreted, with the same results)."""
+    than casadi's virtual machine), when a C compiler is found (``$CC``, ``cc`` or ``gcc``) and
+    ``SERVOTUNE_JIT`` is not ``0``; else none (the kernels are interpreted, with the same
+    results).
+
+    The compiled objects are kept in :func:`cache_folder` by the hash of their source
+    (:mod:`servotune.tuning._ccache`), so a second run of the same problem compiles nothing
+    (the first compiles for about a second and a half on the bundled axis).
+
+    Returns
+    -------
+    dict
+        Options for ``casadi.Function`` (empty when the kernels are interpreted).
+    """
     import os
     import shutil
+    import sys
 
     if os.environ.get("SERVOTUNE_JIT", "1") == "0":
         return {}
@@ -111,9 +122,46 @@ def jit_options() -> dict:
     if compiler is None:
         return {}
     folder = _jit_folder()
-    return {"jit": True, "compiler": "shell",
-            "jit_options": {"compiler": compiler, "flags": ["-O1"], "verbose": False,
-                            "directory": folder + os.sep}}
+    front = compiler
+    cache = cache_folder()
+    if cache is not None:
+        script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_ccache.py")
+        front = f'"{sys.executable}" -S "{script}" "{cache}" "{shutil.which(compiler)}"'
+    return {"jit": True, "compiler": "shell", "jit_cleanup": False,
+            "jit_options": {"compiler": front, "linker": compiler, "flags": ["-O1"],
+                            "verbose": False, "directory": folder + os.sep,
+                            # the folder goes when the process ends (casadi's own clean-up
+                            # would come after it and warn)
+                            "cleanup": False}}
+
+
+def cache_folder() -> str | None:
+    """The folder of the compiled tuning kernels: ``$SERVOTUNE_CACHE/casadi``, else
+    ``$XDG_CACHE_HOME/servotune/casadi`` or ``~/.cache/servotune/casadi``; None (no cache)
+    when ``SERVOTUNE_CACHE`` is empty or the folder cannot be created.
+
+    Returns
+    -------
+    str or None
+        An absolute path without quotes (it is passed through a shell).
+    """
+    import os
+
+    base = os.environ.get("SERVOTUNE_CACHE")
+    if base == "":
+        return None
+    if base is None:
+        xdg = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"),
+                                                                 ".cache")
+        base = os.path.join(xdg, "servotune")
+    folder = os.path.abspath(os.path.join(base, "casadi"))
+    if '"' in folder or "$" in folder or "`" in folder:
+        return None
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError:
+        return None
+    return folder if os.access(folder, os.W_OK) else None
 
 
 _JIT_FOLDER: list[str] = []
@@ -206,6 +254,47 @@ class Kernels:
                 ca.Function(f"{name}_hessian", [u, d, lam], [ca.densify(hessian)], opts))
 
 
+class _IterationLimit(ca.Callback):
+    """IPOPT's iteration callback: stops a solve after a per-solve number of iterations (so
+    one solver serves solves with different limits) or when ``inner`` (e.g. the interruption
+    flag) asks to stop."""
+
+    def __init__(self, inner=None):
+        ca.Callback.__init__(self)
+        self.inner, self.limit, self.count, self.reached = inner, None, 0, False
+        self.construct("iteration_limit", {})
+
+    def start(self, limit: int | None) -> None:
+        self.limit, self.count, self.reached = limit, 0, False
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name in ("f",):
+            return ca.Sparsity.scalar()
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        self.count += 1
+        if self.limit is not None and self.count > self.limit:
+            self.reached = True
+            return [1]
+        if self.inner is not None and float(self.inner.eval(arg)[0]) != 0:
+            return [1]
+        return [0]
+
+
 @dataclass(frozen=True)
 class Solution:
     """What one IPOPT solve returns."""
@@ -224,11 +313,33 @@ class Solution:
 
 
 class Solver:
-    """The NLP for grids of given sizes (band: ``n_band`` frequencies x the cutting models;
-    loop: ``n_loop`` frequencies x all models); the grids' data are its parameters.
+    """The NLP for grids of up to ``n_band`` band frequencies (x the cutting models) and
+    ``n_loop`` loop frequencies (x all models); the grids' data are its parameters.
+
+    A grid may have fewer frequencies than the solver's capacity: the unused columns are
+    switched off by a mask (a parameter too), their constraints then read ``-t_m^2 <= 0``,
+    ``q >= 0`` and ``lo + 1 >= lo``, never active, so one solver serves every round of the grid
+    exchange (building an IPOPT instance costs about 0.2 s). :meth:`parameters` lays a grid's
+    data out for it.
 
     ``rows`` lists, for every constraint row, ``(group, model, column)`` with ``column`` the
-    data column (frequency index x model) or None, so multipliers can follow a refined grid.
+    data column (frequency slot x model) or None; :meth:`row_keys` names each row by its
+    frequency, so multipliers can follow a refined grid.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem (its regime models, requirements, weights, thrust budget and bounds).
+    kernels : Kernels
+        The per-frequency constraint functions of ``problem``.
+    n_band, n_loop : int
+        Capacity of the band and loop grids (frequencies per model).
+    warm : bool
+        IPOPT's warm-start options (start from given multipliers, small barrier parameter).
+    max_iter : int
+        IPOPT's iteration limit; :meth:`solve` may set a lower one per solve.
+    callback : casadi.Callback, optional
+        Called at every IPOPT iteration; a non-zero return stops the solve (an interruption).
     """
 
     def __init__(self, problem: TuningProblem, kernels: Kernels, n_band: int, n_loop: int,
@@ -266,8 +377,10 @@ class Solver:
 
         n_rows_band = kernels.band.size1_in(1)
         data_band = ca.MX.sym("band", n_rows_band, n_band * len(cut))
+        mask_band = ca.MX.sym("band_mask", n_band * len(cut))
         params = [ca.vec(data_band)]
-        band = kernels.band.map(n_band * len(cut))(p, data_band)
+        band = (kernels.band.map(n_band * len(cut))(p, data_band)
+                * ca.repmat(mask_band.T, kernels.band.size1_out(0), 1))
         band_cols = list(range(n_band * len(cut)))
         band_models = [cut[j // n_band] for j in band_cols]
         weights_band = []  # (row of the kernel, group) for the Hessian
@@ -287,13 +400,15 @@ class Solver:
         if kernels.loop is not None:
             n_rows_loop = kernels.loop.size1_in(1)
             data_loop = ca.MX.sym("loop", n_rows_loop, n_loop * n_models)
+            mask_loop = ca.MX.sym("loop_mask", n_loop * n_models)
             params.append(ca.vec(data_loop))
             loops = kernels.loop.map(n_loop * n_models)(p, data_loop)
             loop_cols = list(range(n_loop * n_models))
             loop_models = [j // n_loop for j in loop_cols]
             for i, group in enumerate(kernels.loop_rows):
                 lo = 1.0 if group.startswith("Ms") else 0.0
-                add(loops[i, :].T, lo, ca.inf, group, loop_models, loop_cols)
+                add(loops[i, :].T * mask_loop + (1.0 - mask_loop) * (lo + 1.0), lo, ca.inf,
+                    group, loop_models, loop_cols)
         # constraints without frequencies: thrust cases, kv_min
         rest_start = len(lbg)
         if problem.thrust is not None and "c" in free:
@@ -314,16 +429,21 @@ class Solver:
             c_lo, span = problem.c_cost
             objective = objective + problem.c_cost_weight * (design_value("c") - c_lo) / span
         x = ca.vertcat(p, tt, q)
+        params.append(mask_band)
+        masks = [mask_band]
+        if data_loop is not None:
+            params.append(mask_loop)
+            masks.append(mask_loop)
         self.nlp = {"x": x, "p": ca.vertcat(*params), "f": objective, "g": ca.vertcat(*g)}
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)
         self.groups = [r[0] for r in self.rows]
         self.hessian = self._hessian(x, p, tt, objective, g, rest_start, data_band, data_loop,
-                                     weights_band, len(cut), n_models)
+                                     masks, weights_band, len(cut), n_models)
+        self._limit = _IterationLimit(callback)
         options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                    "ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8, "ipopt.max_iter": max_iter,
-                   "ipopt.mu_strategy": "adaptive", "hess_lag": self.hessian}
-        if callback is not None:
-            options["iteration_callback"] = callback
+                   "ipopt.mu_strategy": "adaptive", "hess_lag": self.hessian,
+                   "iteration_callback": self._limit}
         if warm:
             options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                             "ipopt.warm_start_bound_push": 1e-9,
@@ -334,29 +454,30 @@ class Solver:
         self.lbx = np.array([*lo, *([0.0] * n_t), *([-ca.inf] * n_q)])
         self.ubx = np.array([*hi, *([ca.inf] * n_t), *([ca.inf] * n_q)])
 
-    def _hessian(self, x, p, tt, objective, g, rest_start, data_band, data_loop, weights_band,
-                 n_cut, n_models):
+    def _hessian(self, x, p, tt, objective, g, rest_start, data_band, data_loop, masks,
+                 weights_band, n_cut, n_models):
         kernels = self.kernels
         nf = p.shape[0]
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(self.lbg))
         groups = np.array(self.groups)
 
-        def weights(names, n_cols):
+        def weights(names, n_cols, mask):
             rows = []
             for name in names:
                 idx = np.nonzero(groups == name)[0].tolist()
-                rows.append(lam_g[idx].T if idx else ca.MX.zeros(1, n_cols))
+                rows.append((lam_g[idx] * mask).T if idx else ca.MX.zeros(1, n_cols))
             return ca.vertcat(*rows)
 
         n_band_cols = self.n_band * n_cut
         hess_p = kernels.band_hessian.map(f"band_hessian_{n_band_cols}", "serial", n_band_cols,
                                           [0], [0])(p, data_band,
-                                                    weights(weights_band, n_band_cols))
+                                                    weights(weights_band, n_band_cols,
+                                                            masks[0]))
         if data_loop is not None:
             n_loop_cols = self.n_loop * n_models
             hess_p += kernels.loop_hessian.map(f"loop_hessian_{n_loop_cols}", "serial",
                                                n_loop_cols, [0], [0])(
-                p, data_loop, weights(kernels.loop_rows, n_loop_cols))
+                p, data_loop, weights(kernels.loop_rows, n_loop_cols, masks[1]))
         rest = lam_f * objective
         g_all = ca.vertcat(*g)
         for i in range(rest_start, len(self.lbg)):
@@ -378,7 +499,52 @@ class Solver:
                            ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
 
     def values(self, design: Design) -> np.ndarray:
+        """The scaled variables ``u = log(x / x0)`` of a design's free variables."""
         return np.array([math.log(getattr(design, v) / self.scale[v]) for v in self.free])
+
+    def _padded(self, data: np.ndarray, n_models: int, capacity: int):
+        """A grid's data (model-major blocks of k <= capacity columns) widened to the
+        capacity, unused slots holding copies of each block's last column, and the mask."""
+        rows, cols = data.shape
+        k = cols // n_models
+        if k * n_models != cols or not 0 < k <= capacity:
+            raise ValueError(f"grid data of {cols} columns for {n_models} models does not fit "
+                             f"a solver built for {capacity} frequencies per model")
+        blocks = data.reshape(rows, n_models, k)
+        out = np.empty((rows, n_models, capacity), dtype=float)
+        out[:, :, :k] = blocks
+        out[:, :, k:] = blocks[:, :, -1:]
+        mask = np.zeros((n_models, capacity))
+        mask[:, :k] = 1.0
+        return out.reshape(rows, n_models * capacity), mask.ravel()
+
+    def parameters(self, band_data: np.ndarray, loop_data=None) -> np.ndarray:
+        """The NLP's parameter vector for the grids' data (:meth:`PortData.rows` of the
+        cutting models for the band, of all models with the gate parameters for the loops)."""
+        band, band_mask = self._padded(np.asarray(band_data, dtype=float),
+                                       len(self.problem.cutting_models), self.n_band)
+        params, masks = [band.ravel(order="F")], [band_mask]
+        if self.kernels.loop is not None:
+            loop, loop_mask = self._padded(np.asarray(loop_data, dtype=float),
+                                           len(self.problem.regimes), self.n_loop)
+            params.append(loop.ravel(order="F"))
+            masks.append(loop_mask)
+        return np.concatenate(params + masks)
+
+    def row_keys(self, band: np.ndarray, loop: np.ndarray) -> list:
+        """A key per constraint row that survives a change of grids: ``(group, model,
+        omega)`` for the rows of the grids ``band`` and ``loop`` [rad/s], ``(group, model,
+        None)`` for the others, None for an unused slot."""
+        keys = []
+        for group, model, column in self.rows:
+            if column is None:
+                keys.append((group, model, None))
+                continue
+            in_band = group in ("compliance peak", "chatter")
+            omega, capacity = (band, self.n_band) if in_band else (loop, self.n_loop)
+            slot = column % capacity
+            keys.append((group, model, float(omega[slot])) if slot < omega.size else None)
+        return keys
 
     def epigraph_start(self, design: Design, band_data: np.ndarray) -> np.ndarray:
         """Epigraph variables (t, t_m, q) that make the grid constraints of ``design`` hold."""
@@ -387,7 +553,8 @@ class Solver:
         out = []
         row = 0
         if self.n_t:
-            per = np.sqrt(np.maximum(band[row].reshape(-1, self.n_band).max(axis=1), 0.0))
+            per_model = band[row].reshape(len(self.problem.cutting_models), -1)
+            per = np.sqrt(np.maximum(per_model.max(axis=1), 0.0))
             out += [float(per.max()), *per.tolist()]
             row += 1
         if self.n_q:
@@ -395,11 +562,12 @@ class Solver:
         return np.array(out)
 
     def solve(self, design: Design, band_data, loop_data, region: float | None = None,
-              multipliers=None) -> Solution:
-        """Solve from ``design`` with the grids' data (:meth:`PortData.rows` of the cutting
-        models for the band, of all models with the gate parameters for the loops);
+              multipliers=None, max_iter: int | None = None) -> Solution:
+        """Solve from ``design`` with the grids' data (see :meth:`parameters`).
+
         ``region`` limits each log-variable to +-region around it; ``multipliers`` =
-        (lam_x, lam_g) warm-starts a solver built with ``warm=True``."""
+        (lam_x, lam_g) warm-starts a solver built with ``warm=True``; ``max_iter`` stops the
+        solve after that many iterations (below the solver's own limit)."""
         p0 = self.values(design)
         y0 = self.epigraph_start(design, band_data)
         lbx, ubx = self.lbx.copy(), self.ubx.copy()
@@ -407,17 +575,17 @@ class Solver:
         if region is not None:
             lbx[:n] = np.maximum(lbx[:n], p0 - region)
             ubx[:n] = np.minimum(ubx[:n], p0 + region)
-        params = [band_data.ravel(order="F")]
-        if loop_data is not None and self.kernels.loop is not None:
-            params.append(loop_data.ravel(order="F"))
         args = {"x0": np.concatenate([p0, y0]), "lbx": lbx, "ubx": ubx, "lbg": self.lbg,
-                "ubg": self.ubg, "p": np.concatenate(params)}
+                "ubg": self.ubg, "p": self.parameters(band_data, loop_data)}
         if multipliers is not None:
             args["lam_x0"], args["lam_g0"] = multipliers
+        self._limit.start(max_iter)
         sol = self.solver(**args)
         # IPOPT turns Ctrl-C into a failed solve: end the tuning instead of going on
         interrupt.check("the tuning (IPOPT)")
         stats = self.solver.stats()
+        if self._limit.reached:
+            stats = {**stats, "return_status": "Maximum_Iterations_Exceeded", "success": False}
         x = np.array(sol["x"]).ravel()
         # IPOPT may end a hair outside a bound (its bound_relax_factor): clip to the bounds
         values = {v: float(np.clip(self.scale[v] * math.exp(x[i]), *self.problem.bounds[v]))

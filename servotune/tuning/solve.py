@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from dataclasses import dataclass
 
@@ -48,7 +49,9 @@ from .problem import (
 )
 from .verify import Performance, RequirementCheck, requirement_checks, verify
 
-__all__ = ["TuningResult", "StartSet", "stable_starts", "model_stability", "tune"]
+__all__ = ["TuningResult", "TuningStatistics", "Prediction", "StartSet", "StartsOutcome",
+           "ExchangeOutcome", "stable_starts", "model_stability", "solve_starts",
+           "exchange_grids", "predict", "tune"]
 
 #: Softer velocity loops tried when the initial design leaves a model unstable.
 SOFTENING = (0.7, 0.5, 0.35, 0.25, 0.18, 0.125, 0.09)
@@ -68,8 +71,9 @@ class TuningResult:
     initial, design : Design
     before, after : Performance
         Verified with python-control in every model (``after`` None if not verified).
-    predicted : dict
-        The optimiser's own values (port model) at the optimum.
+    predicted : Prediction or None
+        The optimiser's own values (port model) at the optimum (None for a design checked
+        without optimising it).
     success : bool
         True only if every requirement check holds on the design AND the solver converged
         (or, when no start reached a usable optimum, the initial design, which meets every
@@ -82,7 +86,7 @@ class TuningResult:
         Every requirement judged on the dense check of the design.
     excluded : tuple of (RegimeModel, str)
         Models left out of the optimisation, and why: no stable design was found for them.
-    stats : dict
+    stats : TuningStatistics
         Solver statistics: starts, iterations, exchange rounds, grid size, time [s].
     """
 
@@ -91,11 +95,11 @@ class TuningResult:
     design: Design
     before: Performance
     after: Performance | None
-    predicted: dict
+    predicted: Prediction | None
     success: bool
     reasons: tuple[str, ...]
     active: tuple[str, ...]
-    stats: dict
+    stats: TuningStatistics
     checks: tuple[RequirementCheck, ...] = ()
     excluded: tuple = ()
     start: Design | None = None
@@ -210,28 +214,16 @@ class _Grids:
         self.loop_rows = self.loop_model.data.rows(self.gates)
 
 
-def _row_keys(solver: Solver, band: np.ndarray, loop: np.ndarray) -> list:
-    """A key per constraint row that survives a change of grids: (group, model, omega)."""
-    keys = []
-    for group, model, column in solver.rows:
-        if column is None:
-            keys.append((group, model, None))
-        elif group in ("compliance peak", "chatter"):
-            keys.append((group, model, float(band[column % band.size])))
-        else:
-            keys.append((group, model, float(loop[column % loop.size])))
-    return keys
-
-
-def _moved_multipliers(old: Solver, old_grids, new: Solver, new_grids, lam_g) -> np.ndarray:
-    """Constraint multipliers carried to new grids (new rows start at zero)."""
-    old_keys = _row_keys(old, *old_grids)
+def _moved_multipliers(old: Solver, old_grids: _Grids, new: Solver, new_grids: _Grids,
+                       lam_g: np.ndarray) -> np.ndarray:
+    """Constraint multipliers carried to new grids (rows of new frequencies start at zero)."""
     index = {}
-    for i, key in enumerate(old_keys):
-        index.setdefault(key, i)
+    for i, key in enumerate(old.row_keys(old_grids.band, old_grids.loop)):
+        if key is not None:
+            index.setdefault(key, i)
     out = np.zeros(len(new.rows))
-    for j, key in enumerate(_row_keys(new, *new_grids)):
-        i = index.get(key)
+    for j, key in enumerate(new.row_keys(new_grids.band, new_grids.loop)):
+        i = index.get(key) if key is not None else None
         if i is not None:
             out[j] = lam_g[i]
     return out
@@ -294,14 +286,21 @@ class _Fine:
         cut = list(self.problem.cutting_models)
         self.band_rows = port_data(self.problem, self.band).rows(models=cut)
         self.loop_data = port_data(self.problem, self.loop)
+        # thousands of independent columns: evaluated by one thread per core this process has
+        threads = max(1, min(4, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                             else (os.cpu_count() or 1)))
+        self._band = self.kernels.band.map(self.band_rows.shape[1], "thread", threads)
+        self._loop, self._threads = None, threads
 
     def evaluate(self, solver: Solver, design: Design, gates: np.ndarray):
         u = solver.values(design)
-        band = np.array(self.kernels.band.map(self.band_rows.shape[1])(u, self.band_rows))
+        band = np.array(self._band(u, self.band_rows))
         loop = None
         if self.kernels.loop is not None:
             rows = self.loop_data.rows(gates)
-            loop = np.array(self.kernels.loop.map(rows.shape[1])(u, rows))
+            if self._loop is None:
+                self._loop = self.kernels.loop.map(rows.shape[1], "thread", self._threads)
+            loop = np.array(self._loop(u, rows))
         return band, loop
 
 
@@ -354,18 +353,295 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
     return add_band, add_loop, worst
 
 
-def _solver(problem, kernels, grids: _Grids, warm=False, max_iter=500, callback=None):
-    return Solver(problem, kernels, grids.band.size, grids.loop.size, warm=warm,
-                  max_iter=max_iter, callback=callback)
+#: Frequencies per model the exchange solver has room for beyond the initial grids (when a
+#: round needs more, a larger solver is built).
+EXCHANGE_ROOM = (24, 48)
+#: A later start stops after this many times the iterations the first converged start took.
+START_ITERATION_FACTOR = 2.0
+
+
+@dataclass(frozen=True)
+class TuningStatistics:
+    """How a design was reached: the solver's statistics.
+
+    Attributes
+    ----------
+    starts : int
+        Starting points tried.
+    polished : int
+        Starts that reached a stable optimum.
+    iterations : int
+        IPOPT iterations, all solves.
+    exchange_rounds : int
+        Grid-exchange rounds.
+    grid_points : int
+        Frequencies of the final band and loop grids (per model).
+    models : int
+        Regime models optimised for.
+    return_status : str or None
+        IPOPT's status of the solve that gave the design.
+    current_loop_bandwidth_hz : float or None
+        Bandwidth of the current loop [Hz] (an edge: the hierarchy's gate), None without drive.
+    time_s : float
+        Wall time of :func:`tune` [s].
+    """
+
+    starts: int
+    polished: int
+    iterations: int
+    exchange_rounds: int
+    grid_points: int
+    models: int
+    return_status: str | None
+    current_loop_bandwidth_hz: float | None
+    time_s: float
+
+    def to_dict(self) -> dict:
+        """The statistics as a JSON-ready dict (SI, snake_case keys)."""
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The optimiser's own values (port model, fine grid) at the design.
+
+    Attributes
+    ----------
+    peak_compliance : float
+        Worst compliance peak over the cutting models [m/N].
+    peak_compliance_models : tuple of float
+        The peak in each cutting model [m/N].
+    b_crit : float or None
+        Limiting depth of cut of the worst model [m] (None without a chatter target).
+    """
+
+    peak_compliance: float
+    peak_compliance_models: tuple[float, ...]
+    b_crit: float | None = None
+
+    def to_dict(self) -> dict:
+        """The prediction as a JSON-ready dict."""
+        out = {"peak_compliance": self.peak_compliance,
+               "peak_compliance_models": list(self.peak_compliance_models)}
+        if self.b_crit is not None:
+            out["b_crit"] = self.b_crit
+        return out
+
+
+@dataclass(frozen=True)
+class StartsOutcome:
+    """Stage 2: the starts solved on the initial grids.
+
+    ``best`` is the stable optimum with the lowest objective (None when no start reached
+    one), ``runs`` every solve in order, ``polished`` the number of stable optima."""
+
+    runs: tuple[Solution, ...]
+    best: Solution | None
+    polished: int
+    iterations: int
+    solver: Solver
+
+
+@dataclass(frozen=True)
+class ExchangeOutcome:
+    """Stage 3: the design after the grid exchange.
+
+    ``failed`` when a round's constraints at the added frequencies could not be met (the
+    design is then the last feasible one on the previous grids); ``worst`` is the largest
+    relative amount by which a constraint is worse between the grid points than on them."""
+
+    design: Design
+    best: Solution
+    solver: Solver
+    grids: _Grids
+    rounds: int
+    worst: float
+    failed: bool
+    iterations: int
+
+
+def solve_starts(problem: TuningProblem, kernels: Kernels, grids: _Grids,
+                 designs: tuple[Design, ...], callback=None) -> StartsOutcome:
+    """Stage 2: solve from each start on the initial grids, in turn, until two reach the
+    same stable optimum.
+
+    A start that has not converged in ``START_ITERATION_FACTOR`` times the iterations the
+    first converged start took is left (the solves that lead somewhere take about as many).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+    kernels : Kernels
+    grids : _Grids
+        The initial grids with their data.
+    designs : tuple of Design
+        Stable starting points (:func:`stable_starts`).
+    callback : casadi.Callback, optional
+        Interruption callback.
+
+    Returns
+    -------
+    StartsOutcome
+    """
+    solver = Solver(problem, kernels, grids.band.size, grids.loop.size, max_iter=300,
+                    callback=callback)
+    runs, best, polished, iterations, limit = [], None, 0, 0, None
+    for d in designs:
+        sol = solver.solve(d, grids.band_rows, grids.loop_rows, max_iter=limit)
+        iterations += sol.stats["iter_count"]
+        runs.append(sol)
+        if limit is None and sol.converged:
+            limit = max(60, int(START_ITERATION_FACTOR * sol.stats["iter_count"]))
+        if not sol.converged or not all(model_stability(problem, sol.design)):
+            continue
+        polished += 1
+        if best is not None and _same_optimum(sol, best, problem.free):
+            break
+        if best is None or sol.objective < best.objective:
+            best = sol
+    return StartsOutcome(tuple(runs), best, polished, iterations, solver)
+
+
+def exchange_grids(problem: TuningProblem, kernels: Kernels, grids: _Grids, gamma: np.ndarray,
+                   start: Solution, start_solver: Solver, current_bw: float | None,
+                   max_exchange: int = 30, tolerance: float = 1e-6,
+                   callback=None) -> ExchangeOutcome:
+    """Stage 3: refine the grids where the constraints are worst and re-solve, warm, until
+    grid and truth agree within ``tolerance`` (relative).
+
+    Each round evaluates the constraints on fine grids, adds the frequencies where they are
+    worst (:func:`_exchange_points`), updates the position-loop bandwidth ratio ``gamma`` of
+    the hierarchy gates, and re-solves from the last design with the multipliers carried
+    over; when the warm solve fails, smaller trust regions around the design are tried.
+
+    Parameters
+    ----------
+    problem, kernels : TuningProblem, Kernels
+    grids : _Grids
+        The grids of the start phase.
+    gamma : numpy.ndarray
+        Position-loop bandwidth over Kv of each model at the reference start.
+    start : Solution
+        The best optimum of the start phase.
+    start_solver : Solver
+        The solver that found it (its rows name the multipliers).
+    current_bw : float or None
+        Current-loop bandwidth [rad/s].
+    max_exchange : int
+        Largest number of rounds.
+    tolerance : float
+        Relative agreement between grid and true extrema that ends the exchange.
+    callback : casadi.Callback, optional
+        Interruption callback.
+
+    Returns
+    -------
+    ExchangeOutcome
+    """
+    req = problem.requirements
+    fine = _Fine(problem, kernels, grid(*req.band, FINE_POINTS), grid(*req.loop_band, FINE_POINTS))
+    fine_loop_model = ResponseModel(problem, grid(*req.loop_band, 3000))
+    solver, warm = start_solver, None
+    design, best, rounds, worst, failed, iterations = start.design, start, 0, math.inf, False, 0
+    for rounds in range(1, max_exchange + 1):  # noqa: B007
+        # the ratio of the position loop's bandwidth to Kv, relaxed (a plain update overshoots:
+        # Kv and the ratio move against each other)
+        gamma = np.sqrt(gamma * _gamma(problem, design, fine_loop_model))
+        new_gates = gate_parameters(problem, gamma, current_bw)
+        gates_moved = not np.allclose(new_gates, grids.gates, rtol=0, atol=0.02)
+        add_band, add_loop, worst = _exchange_points(problem, kernels, fine, solver, grids,
+                                                     design)
+        if worst <= tolerance and not gates_moved:
+            break
+        old_solver, old_grids = solver, grids
+        grids = _Grids(problem, np.unique(np.concatenate([grids.band, add_band])),
+                       np.unique(np.concatenate([grids.loop, add_loop])), new_gates)
+        if warm is None or grids.band.size > warm.n_band or grids.loop.size > warm.n_loop:
+            warm = Solver(problem, kernels, grids.band.size + EXCHANGE_ROOM[0],
+                          grids.loop.size + EXCHANGE_ROOM[1], warm=True, callback=callback)
+        solver = warm
+        lam = _moved_multipliers(old_solver, old_grids, solver, grids, best.multipliers[1])
+        lam_x = best.multipliers[0]
+        accepted = False
+        for region in (None, 0.5, 0.1, 0.02):
+            sol = solver.solve(design, grids.band_rows, grids.loop_rows, region,
+                               multipliers=(lam_x, lam))
+            iterations += sol.stats["iter_count"]
+            if sol.converged and all(model_stability(problem, sol.design)):
+                design, best, accepted = sol.design, sol, True
+                break
+        if not accepted:
+            failed = True
+            break
+    return ExchangeOutcome(design, best, solver, grids, rounds, worst, failed, iterations)
+
+
+def predict(problem: TuningProblem, design: Design) -> Prediction:
+    """The optimiser's port model at ``design`` on a fine band grid (6000 frequencies).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+    design : Design
+
+    Returns
+    -------
+    Prediction
+    """
+    h = ResponseModel(problem, grid(*problem.requirements.band, 6000))(design)["compliance"]
+    cut = list(problem.cutting_models)
+    b_crit = None
+    if problem.chatter is not None:
+        b_crit = problem.chatter.b_crit(float((problem.chatter.mu * h[cut].real).min()))
+    return Prediction(float(np.abs(h[cut]).max()),
+                      tuple(float(np.abs(h[m]).max()) for m in cut), b_crit)
+
+
+def _statistics(starts: int, polished: int, iterations: int, rounds: int, grids: _Grids,
+                problem: TuningProblem, status, current_bw, t_start: float) -> TuningStatistics:
+    return TuningStatistics(
+        starts=starts, polished=polished, iterations=int(iterations), exchange_rounds=rounds,
+        grid_points=int(grids.band.size + grids.loop.size), models=len(problem.regimes),
+        return_status=status,
+        current_loop_bandwidth_hz=None if current_bw is None else current_bw * HZ_PER_RAD_S,
+        time_s=time.perf_counter() - t_start)
+
+
+def _kept_models(problem: TuningProblem, start_set: StartSet):
+    """The problem without the models no start stabilises, and those models with why."""
+    excluded = tuple((problem.regimes[i], _exclusion_reason(problem.regimes[i]))
+                     for i in start_set.excluded)
+    if start_set.excluded:
+        kept = tuple(m for i, m in enumerate(problem.regimes) if i not in start_set.excluded)
+        if not any(m.cutting for m in kept):
+            raise NoStableStartError(
+                "no design was found that keeps any cutting regime stable: "
+                + "; ".join(f"{m.name}: {r}" for m, r in excluded))
+        problem = dataclasses.replace(problem, regimes=kept)
+    if not start_set.designs:
+        raise NoStableStartError(
+            "no stable starting design: the initial design leaves "
+            + ", ".join(m.name for m, s in zip(problem.regimes, start_set.initial_stable,
+                                                  strict=False) if not s)
+            + " unstable and neither a softer velocity loop nor random designs within the "
+              "bounds stabilise every model; lower the velocity-loop gain kp, widen the bounds "
+              "or check the model")
+    return problem, excluded
 
 
 def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 30,
          tolerance: float = 1e-6, callback=None) -> TuningResult:
     """Optimise the free design variables with casadi/IPOPT, then verify with python-control.
 
+    The stages: :func:`stable_starts`, :func:`solve_starts`, :func:`exchange_grids`,
+    :func:`predict`, then :func:`~servotune.tuning.verify.verify` and
+    :func:`~servotune.tuning.verify.requirement_checks` of the design in every model. The
+    problem they solve is written out in :mod:`servotune.tuning.nlp`.
+
     Parameters
     ----------
     problem : TuningProblem
+        Structure, drive, regime models, requirements, bounds and weights.
     starts : int
         Number of starting points (the initial design, or a softened one when it leaves a model
         unstable, plus seeded stable draws within the bounds). Tuning problems of feed axes
@@ -396,147 +672,72 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     TuningDidNotConvergeError
         "the optimiser found no better design": the frequency constraints were met but the
         objective did not settle, and the initial design does not meet every requirement.
+
+    See Also
+    --------
+    servotune.design.tune_axis : the design job (regimes, tuning, verdict) around this.
+    servotune.tuning.verify.verify : the independent check of a design.
     """
     t_start = time.perf_counter()
     req = problem.requirements
     x0 = problem.initial_design()
-    before = verify(problem, x0)
     current_bw = (current_loop_bandwidth(problem.drive) if problem.drive is not None else None)
+    # 1. stable starts (models no start stabilises are left out and reported)
     start_set = stable_starts(problem, starts, seed)
-    excluded = tuple((problem.regimes[i], _exclusion_reason(problem.regimes[i]))
-                     for i in start_set.excluded)
-    if start_set.excluded:
-        kept = tuple(m for i, m in enumerate(problem.regimes) if i not in start_set.excluded)
-        if not any(m.cutting for m in kept):
-            raise NoStableStartError(
-                "no design was found that keeps any cutting regime stable: "
-                + "; ".join(f"{m.name}: {r}" for m, r in excluded))
-        problem = dataclasses.replace(problem, regimes=kept)
-        before = verify(problem, x0)
-    if not start_set.designs:
-        raise NoStableStartError(
-            "no stable starting design: the initial design leaves "
-            + ", ".join(m.name for m, s in zip(problem.regimes, start_set.initial_stable,
-                                                  strict=False) if not s)
-            + " unstable and neither a softer velocity loop nor random designs within the "
-              "bounds stabilise every model; lower the velocity-loop gain kp, widen the bounds "
-              "or check the model")
+    problem, excluded = _kept_models(problem, start_set)
+    before = verify(problem, x0)
     reference = start_set.designs[0]
     h0, s0 = _scale_factors(problem, reference)
     kernels = Kernels(problem, h0, s0)
-    fine_loop_model = ResponseModel(problem, grid(*req.loop_band, 3000))
-    gamma = _gamma(problem, reference, fine_loop_model)
-    gates = gate_parameters(problem, gamma, current_bw)
+    gamma = _gamma(problem, reference, ResponseModel(problem, grid(*req.loop_band, 3000)))
     grids = _Grids(problem, grid(*req.band, problem.n_grid), grid(*req.loop_band, problem.n_grid),
-                   gates)
-    iterations = 0
-
-    # 2. the starts on the initial grid, in turn, until two reach the same stable optimum; a
-    # start that has not converged in three times the iterations the first one took is left
-    full = _solver(problem, kernels, grids, max_iter=300, callback=callback)
-    runs, best, polished = [], None, 0
-    for k, d in enumerate(start_set.designs):
-        if k == 1 and runs and runs[0].converged:
-            limit = max(60, 3 * runs[0].stats["iter_count"])
-            full = _solver(problem, kernels, grids, max_iter=limit, callback=callback)
-        sol = full.solve(d, grids.band_rows, grids.loop_rows)
-        iterations += sol.stats["iter_count"]
-        runs.append(sol)
-        if not sol.converged or not all(model_stability(problem, sol.design)):
-            continue
-        polished += 1
-        if best is not None and _same_optimum(sol, best, problem.free):
-            break
-        if best is None or sol.objective < best.objective:
-            best = sol
-    if best is None:
-        why = _no_optimum(full, runs, len(start_set.designs))
+                   gate_parameters(problem, gamma, current_bw))
+    # 2. the starts on the initial grids
+    phase = solve_starts(problem, kernels, grids, start_set.designs, callback)
+    n_starts = len(start_set.designs)
+    if phase.best is None:
+        why = _no_optimum(phase.solver, phase.runs, n_starts)
         checks0 = requirement_checks(problem, x0, before, current_bw)
         if not (before.stable and all(c.holds for c in checks0)):
             _raise_infeasible(why, checks0)
+        status = phase.runs[-1].stats["return_status"] if phase.runs else None
         return TuningResult(
-            problem=problem, initial=x0, design=x0, before=before, after=before, predicted={},
-            success=True, reasons=(), active=(), checks=checks0, excluded=excluded,
-            start=reference,
+            problem=problem, initial=x0, design=x0, before=before, after=before,
+            predicted=predict(problem, x0), success=True, reasons=(), active=(),
+            checks=checks0, excluded=excluded, start=reference,
             notes=(f"the optimiser found no better design than the initial one ({why}); the "
                    "initial design is kept: it meets every requirement in the dense check. "
                    "More starts (--starts) or other bounds may find a better one",),
-            stats={"starts": len(start_set.designs), "polished": 0,
-                   "iterations": int(iterations), "exchange_rounds": 0,
-                   "grid_points": int(grids.band.size + grids.loop.size),
-                   "models": len(problem.regimes),
-                   "return_status": runs[-1].stats["return_status"] if runs else None,
-                   "current_loop_bandwidth_hz": None if current_bw is None
-                   else current_bw * HZ_PER_RAD_S,
-                   "time_s": time.perf_counter() - t_start})
-    solver = full
-
-    # 4. grid exchange (and the position-loop bandwidth ratio of the gates)
-    fine = _Fine(problem, kernels, grid(*req.band, FINE_POINTS), grid(*req.loop_band, FINE_POINTS))
-    design, rounds, worst_rel, exchange_failed = best.design, 0, math.inf, False
-    for rounds in range(1, max_exchange + 1):  # noqa: B007
-        # the ratio of the position loop's bandwidth to Kv, relaxed (a plain update overshoots:
-        # Kv and the ratio move against each other)
-        gamma = np.sqrt(gamma * _gamma(problem, design, fine_loop_model))
-        new_gates = gate_parameters(problem, gamma, current_bw)
-        gates_moved = not np.allclose(new_gates, grids.gates, rtol=0, atol=0.02)
-        add_band, add_loop, worst_rel = _exchange_points(problem, kernels, fine, solver, grids,
-                                                         design)
-        if worst_rel <= tolerance and not gates_moved:
-            break
-        old_solver, old_grids = solver, (grids.band, grids.loop)
-        grids = _Grids(problem, np.unique(np.concatenate([grids.band, add_band])),
-                       np.unique(np.concatenate([grids.loop, add_loop])), new_gates)
-        solver = _solver(problem, kernels, grids, warm=True, callback=callback)
-        lam = _moved_multipliers(old_solver, old_grids, solver, (grids.band, grids.loop),
-                                 best.multipliers[1])
-        accepted = False
-        for region in (None, 0.5, 0.1, 0.02):
-            sol = solver.solve(design, grids.band_rows, grids.loop_rows, region,
-                               multipliers=(best.multipliers[0], lam))
-            iterations += sol.stats["iter_count"]
-            if sol.converged and all(model_stability(problem, sol.design)):
-                design, best, accepted = sol.design, sol, True
-                break
-        if not accepted:
-            exchange_failed = True
-            break
-
-    active = _active(problem, design, solver, best)
-    fine_band = ResponseModel(problem, grid(*req.band, 6000))(design)["compliance"]
-    cut = list(problem.cutting_models)
-    pred = {"peak_compliance": float(np.abs(fine_band[cut]).max()),
-            "peak_compliance_models": [float(np.abs(fine_band[m]).max()) for m in cut]}
-    if problem.chatter is not None:
-        pred["b_crit"] = problem.chatter.b_crit(
-            float((problem.chatter.mu * fine_band[cut].real).min()))
+            stats=_statistics(n_starts, 0, phase.iterations, 0, grids, problem, status,
+                              current_bw, t_start))
+    # 3. grid exchange (and the position-loop bandwidth ratio of the gates)
+    ex = exchange_grids(problem, kernels, grids, gamma, phase.best, phase.solver, current_bw,
+                        max_exchange, tolerance, callback)
+    # 4. the optimiser's prediction and the independent check
+    active = _active(problem, ex.design, ex.solver, ex.best)
+    pred = predict(problem, ex.design)
     reasons = []
-    if exchange_failed:
+    if ex.failed:
         reasons.append("the optimiser could not satisfy the constraints at frequencies added by "
-                       f"the grid exchange (round {rounds}); the design is the last feasible one "
-                       "on the previous grid")
-    elif worst_rel > max(tolerance, 1e-4):
-        reasons.append(f"the frequency grid did not converge (true extrema {worst_rel:.2g} "
-                       f"beyond the grid after {rounds} exchange rounds)")
-    after = verify(problem, design)
-    checks = requirement_checks(problem, design, after, current_bw)
+                       f"the grid exchange (round {ex.rounds}); the design is the last feasible "
+                       "one on the previous grid")
+    elif ex.worst > max(tolerance, 1e-4):
+        reasons.append(f"the frequency grid did not converge (true extrema {ex.worst:.2g} "
+                       f"beyond the grid after {ex.rounds} exchange rounds)")
+    after = verify(problem, ex.design)
+    checks = requirement_checks(problem, ex.design, after, current_bw)
     reasons += [f"verification: {c.text}" for c in checks if not c.holds]
-    if after.stable and abs(after.peak_compliance / pred["peak_compliance"] - 1) > 0.01:
+    if after.stable and abs(after.peak_compliance / pred.peak_compliance - 1) > 0.01:
         reasons.append(
             f"verification: the state-space compliance peak {after.peak_compliance:.4g} m/N "
-            f"differs from the optimiser's {pred['peak_compliance']:.4g} m/N by more than 1%")
+            f"differs from the optimiser's {pred.peak_compliance:.4g} m/N by more than 1%")
     return TuningResult(
-        problem=problem, initial=x0, design=design, before=before, after=after,
+        problem=problem, initial=x0, design=ex.design, before=before, after=after,
         predicted=pred, success=not reasons, reasons=tuple(reasons), active=tuple(active),
         checks=checks, excluded=excluded, start=reference,
-        stats={"starts": len(start_set.designs), "polished": polished,
-               "iterations": int(iterations), "exchange_rounds": rounds,
-               "grid_points": int(grids.band.size + grids.loop.size),
-               "models": len(problem.regimes),
-               "return_status": best.stats["return_status"],
-               "current_loop_bandwidth_hz": (None if current_bw is None
-                                             else current_bw * HZ_PER_RAD_S),
-               "time_s": time.perf_counter() - t_start})
+        stats=_statistics(n_starts, phase.polished, phase.iterations + ex.iterations,
+                          ex.rounds, ex.grids, problem, ex.best.stats["return_status"],
+                          current_bw, t_start))
 
 
 def _exclusion_reason(model) -> str:
