@@ -23,7 +23,7 @@ The numpydoc checks (``numpydoc.validate.validate``; the codes are numpydoc's) a
   of classes.
 - ``SA01`` on the main entry points (``MAIN_ENTRY_POINTS``, the functions the README and the
   index of the API reference lead with), and their See Also sections name at least one other
-  main entry point, so a reader can go from one to the next.
+  main entry point, so a reader can go from one to the next (reported as ``SA-main``).
 
 ``EX01`` (Examples), ``ES01`` (extended summary), ``SA01`` elsewhere, ``RT02``/``RT03`` and the
 ``YD`` codes are not asked: the examples the docstrings have run as doctests
