@@ -72,8 +72,23 @@ def _sigmoid(y):
 
 def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
                     current_bandwidth: float | None) -> np.ndarray:
-    """The per-model constants of the gated rows (one row per model): for each gated
-    constraint whether it applies to the model (1/0) and the log of its edge parameter."""
+    """Return the per-model constants of the gated rows of the loop kernel.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem (its requirements and which models move).
+    gamma : numpy.ndarray
+        Position-loop bandwidth over Kv of each regime model (edges of the hierarchy gate).
+    current_bandwidth : float or None
+        Bandwidth of the current loop [rad/s] (None: no current-loop row).
+
+    Returns
+    -------
+    numpy.ndarray
+        One row per regime model: for each gated constraint of ``GATE_ROWS``, whether it
+        applies to the model (1/0) and the log of its edge parameter.
+    """
     req = problem.requirements
     moving = set(problem.moving_models)
     rows = []
@@ -97,10 +112,11 @@ N_GATE_PARAMS = 8
 
 
 def jit_options() -> dict:
-    """casadi options that compile the per-frequency kernels to C (about three times faster
-    than casadi's virtual machine), when a C compiler is found (``$CC``, ``cc`` or ``gcc``) and
-    ``SERVOTUNE_JIT`` is not ``0``; else none (the kernels are interpreted, with the same
-    results).
+    """Return the casadi options that compile the per-frequency kernels to C.
+
+    Compiled kernels run about three times faster than casadi's virtual machine. They are
+    compiled when a C compiler is found (``$CC``, ``cc`` or ``gcc``) and ``SERVOTUNE_JIT`` is
+    not ``0``; else the options are empty (the kernels are interpreted, with the same results).
 
     The compiled objects are kept in :func:`cache_folder` by the hash of their source
     (:mod:`servotune.tuning._ccache`), so a second run of the same problem compiles nothing
@@ -499,12 +515,23 @@ class Solver:
                            ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
 
     def values(self, design: Design) -> np.ndarray:
-        """The scaled variables ``u = log(x / x0)`` of a design's free variables."""
+        """Return the scaled variables ``u = log(x / x0)`` of a design's free variables.
+
+        Parameters
+        ----------
+        design : Design
+            The design.
+
+        Returns
+        -------
+        numpy.ndarray
+            One value per free variable, in the order of ``problem.free``.
+        """
         return np.array([math.log(getattr(design, v) / self.scale[v]) for v in self.free])
 
     def _padded(self, data: np.ndarray, n_models: int, capacity: int):
-        """A grid's data (model-major blocks of k <= capacity columns) widened to the
-        capacity, unused slots holding copies of each block's last column, and the mask."""
+        """Widen a grid's data (model-major blocks of k <= capacity columns) to the capacity,
+        unused slots holding copies of each block's last column; also return the mask."""
         rows, cols = data.shape
         k = cols // n_models
         if k * n_models != cols or not 0 < k <= capacity:
@@ -519,8 +546,27 @@ class Solver:
         return out.reshape(rows, n_models * capacity), mask.ravel()
 
     def parameters(self, band_data: np.ndarray, loop_data=None) -> np.ndarray:
-        """The NLP's parameter vector for the grids' data (:meth:`PortData.rows` of the
-        cutting models for the band, of all models with the gate parameters for the loops)."""
+        """Return the NLP's parameter vector for the grids' data.
+
+        Parameters
+        ----------
+        band_data : numpy.ndarray
+            :meth:`PortData.rows` of the cutting models on the band grid (at most
+            ``n_band`` frequencies per model).
+        loop_data : numpy.ndarray, optional
+            :meth:`PortData.rows` of all models with the gate parameters on the loop grid (at
+            most ``n_loop`` frequencies per model); needed when the problem has a drive.
+
+        Returns
+        -------
+        numpy.ndarray
+            The data, widened to the capacity, followed by the masks of the used slots.
+
+        Raises
+        ------
+        ValueError
+            When a grid has more frequencies than the solver has room for.
+        """
         band, band_mask = self._padded(np.asarray(band_data, dtype=float),
                                        len(self.problem.cutting_models), self.n_band)
         params, masks = [band.ravel(order="F")], [band_mask]
@@ -532,9 +578,19 @@ class Solver:
         return np.concatenate(params + masks)
 
     def row_keys(self, band: np.ndarray, loop: np.ndarray) -> list:
-        """A key per constraint row that survives a change of grids: ``(group, model,
-        omega)`` for the rows of the grids ``band`` and ``loop`` [rad/s], ``(group, model,
-        None)`` for the others, None for an unused slot."""
+        """Return a key per constraint row that survives a change of grids.
+
+        Parameters
+        ----------
+        band, loop : numpy.ndarray
+            The band and loop grids [rad/s] the solver is used with.
+
+        Returns
+        -------
+        list
+            ``(group, model, omega)`` for the rows of the grids, ``(group, model, None)`` for
+            the rows without a frequency, None for an unused slot.
+        """
         keys = []
         for group, model, column in self.rows:
             if column is None:
@@ -547,7 +603,20 @@ class Solver:
         return keys
 
     def epigraph_start(self, design: Design, band_data: np.ndarray) -> np.ndarray:
-        """Epigraph variables (t, t_m, q) that make the grid constraints of ``design`` hold."""
+        """Return the epigraph variables (t, t_m, q) that make the grid constraints hold.
+
+        Parameters
+        ----------
+        design : Design
+            The design the solve starts from.
+        band_data : numpy.ndarray
+            The band grid's data (as for :meth:`parameters`).
+
+        Returns
+        -------
+        numpy.ndarray
+            t (the worst peak), t_m per cutting model (both scaled by h0) and q (chatter).
+        """
         cols = band_data.shape[1]
         band = np.array(self.kernels.band.map(cols)(self.values(design), band_data))
         out = []
@@ -563,11 +632,33 @@ class Solver:
 
     def solve(self, design: Design, band_data, loop_data, region: float | None = None,
               multipliers=None, max_iter: int | None = None) -> Solution:
-        """Solve from ``design`` with the grids' data (see :meth:`parameters`).
+        """Solve from ``design`` with the grids' data.
 
-        ``region`` limits each log-variable to +-region around it; ``multipliers`` =
-        (lam_x, lam_g) warm-starts a solver built with ``warm=True``; ``max_iter`` stops the
-        solve after that many iterations (below the solver's own limit)."""
+        Parameters
+        ----------
+        design : Design
+            The starting design (its fixed variables are kept).
+        band_data, loop_data : numpy.ndarray
+            The grids' data (see :meth:`parameters`).
+        region : float, optional
+            Limits each log-variable to +-region around its start (a trust region).
+        multipliers : tuple of numpy.ndarray, optional
+            (lam_x, lam_g) to warm-start a solver built with ``warm=True``.
+        max_iter : int, optional
+            Stop after that many iterations (below the solver's own limit); the solution then
+            reports "Maximum_Iterations_Exceeded".
+
+        Returns
+        -------
+        Solution
+            The design reached (clipped to the bounds), objective, IPOPT's statistics, the
+            constraint values and the multipliers.
+
+        Raises
+        ------
+        servotune.interrupt.Interrupted
+            When an interruption (Ctrl-C) stopped IPOPT.
+        """
         p0 = self.values(design)
         y0 = self.epigraph_start(design, band_data)
         lbx, ubx = self.lbx.copy(), self.ubx.copy()
@@ -595,7 +686,18 @@ class Solver:
                         (np.array(sol["lam_x"]).ravel(), np.array(sol["lam_g"]).ravel()), x)
 
     def violations(self, g: np.ndarray) -> dict:
-        """Largest violation of each constraint group (scaled units)."""
+        """Return the largest violation of each constraint group (scaled units).
+
+        Parameters
+        ----------
+        g : numpy.ndarray
+            Constraint values of a solve (:attr:`Solution.g`).
+
+        Returns
+        -------
+        dict
+            Group name -> largest violation (0 when the group holds).
+        """
         out = {}
         for gi, lo, hi, group in zip(g, self.lbg, self.ubg, self.groups, strict=True):
             v = max(lo - gi, gi - hi, 0.0)
@@ -603,7 +705,20 @@ class Solver:
         return out
 
     def active(self, g: np.ndarray, tol: float = 1e-5) -> list[str]:
-        """Constraint groups with a row at its bound (besides the objective's epigraph)."""
+        """Return the constraint groups with a row at its bound (the epigraphs aside).
+
+        Parameters
+        ----------
+        g : numpy.ndarray
+            Constraint values of a solve.
+        tol : float
+            Relative distance to a bound counted as "at" it.
+
+        Returns
+        -------
+        list of str
+            The active groups, in the order of the rows.
+        """
         out = []
         for group in dict.fromkeys(self.groups):
             if group in ("compliance peak", "chatter", "worst peak"):

@@ -110,7 +110,20 @@ class TuningResult:
 
 # ----------------------------------------------------------------------- 1. starting points
 def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
-    """Closed-loop stability of a design in each regime model (state-space poles)."""
+    """Return the closed-loop stability of a design in each regime model (state-space poles).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem (structure, drive, regime models).
+    design : Design
+        The design.
+
+    Returns
+    -------
+    list of bool
+        One per regime model: True when every closed-loop pole lies in the left half plane.
+    """
     drive = problem.drive_for(design)
     out = []
     for model in problem.regimes:
@@ -137,13 +150,31 @@ class StartSet:
 
 def stable_starts(problem: TuningProblem, starts: int, seed: int = 0,
                   max_draws: int | None = None, spread: float = 3.0) -> StartSet:
-    """Starting points that keep every (kept) regime model stable.
+    """Return starting points that keep every (kept) regime model stable.
 
     The frequency constraints of the NLP keep a design stable only along continuous paths
     from a stable one, so every start must be stable in every model it is optimised for. The
     draws are log-uniform within a factor ``spread`` of the first stable design (the initial
     one or its softened version), clipped to the bounds: far draws mostly land where the
     problem has other, worse optima or none.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem.
+    starts : int
+        Number of starting points wanted.
+    seed : int
+        Seed of the draws.
+    max_draws : int, optional
+        Largest number of random draws (default 20 per start).
+    spread : float
+        Draws lie within this factor of the first stable design.
+
+    Returns
+    -------
+    StartSet
+        The starts, the models no candidate stabilised and the initial design's stability.
     """
     x0 = problem.initial_design()
     s0 = model_stability(problem, x0)
@@ -397,7 +428,13 @@ class TuningStatistics:
     time_s: float
 
     def to_dict(self) -> dict:
-        """The statistics as a JSON-ready dict (SI, snake_case keys)."""
+        """Return the statistics as a JSON-ready dict.
+
+        Returns
+        -------
+        dict
+            The fields by name (SI, snake_case keys).
+        """
         return dataclasses.asdict(self)
 
 
@@ -420,7 +457,14 @@ class Prediction:
     b_crit: float | None = None
 
     def to_dict(self) -> dict:
-        """The prediction as a JSON-ready dict."""
+        """Return the prediction as a JSON-ready dict.
+
+        Returns
+        -------
+        dict
+            ``peak_compliance`` [m/N], ``peak_compliance_models`` and, with a chatter target,
+            ``b_crit`` [m].
+        """
         out = {"peak_compliance": self.peak_compliance,
                "peak_compliance_models": list(self.peak_compliance_models)}
         if self.b_crit is not None:
@@ -471,7 +515,9 @@ def solve_starts(problem: TuningProblem, kernels: Kernels, grids: _Grids,
     Parameters
     ----------
     problem : TuningProblem
+        The problem.
     kernels : Kernels
+        Its per-frequency kernels.
     grids : _Grids
         The initial grids with their data.
     designs : tuple of Design
@@ -482,6 +528,7 @@ def solve_starts(problem: TuningProblem, kernels: Kernels, grids: _Grids,
     Returns
     -------
     StartsOutcome
+        The solves, the best stable optimum and the solver.
     """
     solver = Solver(problem, kernels, grids.band.size, grids.loop.size, max_iter=300,
                     callback=callback)
@@ -517,6 +564,7 @@ def exchange_grids(problem: TuningProblem, kernels: Kernels, grids: _Grids, gamm
     Parameters
     ----------
     problem, kernels : TuningProblem, Kernels
+        The problem and its per-frequency kernels.
     grids : _Grids
         The grids of the start phase.
     gamma : numpy.ndarray
@@ -537,6 +585,7 @@ def exchange_grids(problem: TuningProblem, kernels: Kernels, grids: _Grids, gamm
     Returns
     -------
     ExchangeOutcome
+        The design on the refined grids and how it was reached.
     """
     req = problem.requirements
     fine = _Fine(problem, kernels, grid(*req.band, FINE_POINTS), grid(*req.loop_band, FINE_POINTS))
@@ -582,11 +631,14 @@ def predict(problem: TuningProblem, design: Design) -> Prediction:
     Parameters
     ----------
     problem : TuningProblem
+        The problem.
     design : Design
+        The design.
 
     Returns
     -------
     Prediction
+        Peaks per cutting model and the limiting depth of cut.
     """
     h = ResponseModel(problem, grid(*problem.requirements.band, 6000))(design)["compliance"]
     cut = list(problem.cutting_models)
