@@ -29,6 +29,7 @@ from .compliance import (
     nonlinear_compliance,
     presliding_guess,
     refine_peak,
+    require_stable_regime,
 )
 from .continuation import Branch, ContinuationSettings, continue_in_frequency
 from .linear import PadReceptance, pad_receptance
@@ -52,5 +53,6 @@ __all__ = [
     "periodic_friction_jacobian",
     "presliding_guess",
     "refine_peak",
+    "require_stable_regime",
     "samples_from_harmonics",
 ]

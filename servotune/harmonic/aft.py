@@ -177,6 +177,7 @@ def harmonics_from_samples(values, harmonics: int) -> tuple[np.ndarray, np.ndarr
     Parameters
     ----------
     values : array_like, shape (..., N)
+        Samples at N equally spaced instants of one period.
     harmonics : int
         H.
 
@@ -193,8 +194,8 @@ def harmonics_from_samples(values, harmonics: int) -> tuple[np.ndarray, np.ndarr
     --------
     >>> t = np.arange(8) / 8
     >>> m, c = harmonics_from_samples(1.0 + 2.0 * np.cos(2 * np.pi * t - 0.5), 2)
-    >>> round(float(m), 12), np.round(c, 12)
-    (1.0, array([1.75516512-0.95885108j, 0.        +0.j        ]))
+    >>> round(float(m), 12), complex(np.round(c[0], 8)), float(abs(c[1])) < 1e-12
+    (1.0, (1.75516512-0.95885108j), True)
     """
     v = np.asarray(values, dtype=float)
     n = v.shape[-1]

@@ -112,6 +112,7 @@ class PadBalance:
     speed : float
         Mean pad sliding speed V [m/s] (0 at rest).
     settings : HarmonicSettings
+        Harmonics, AFT samples and tolerances.
 
     Notes
     -----
@@ -152,17 +153,50 @@ class PadBalance:
         return self._cache[1]
 
     def complex_of(self, y) -> np.ndarray:
-        """Pad displacement harmonics, shape (n, H), from the real unknowns."""
+        """Return the pad displacement harmonics from the real unknowns.
+
+        Parameters
+        ----------
+        y : array_like, shape (n 2H,)
+            Real unknowns.
+
+        Returns
+        -------
+        numpy.ndarray, complex, shape (n, H)
+            X_p,k [m].
+        """
         y = np.asarray(y, dtype=float).reshape(self.n_pads, 2, self.harmonics)
         return y[:, 0] + 1j * y[:, 1]
 
     def real_of(self, x) -> np.ndarray:
-        """The real unknowns from complex harmonics of shape (n, H)."""
+        """Return the real unknowns of complex pad harmonics.
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex, shape (n, H)
+            X_p,k [m].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n 2H,)
+        """
         return np.stack([x.real, x.imag], axis=1).reshape(-1)
 
     def friction_harmonics(self, x, omega: float) -> np.ndarray:
-        """Friction force harmonics [N] of every pad, shape (n, H), for pad displacement
-        harmonics ``x`` (n, H) at angular frequency ``omega`` (AFT)."""
+        """Return the friction force harmonics of every pad by AFT.
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex, shape (n, H)
+            Pad displacement harmonics [m].
+        omega : float
+            Angular frequency [rad/s].
+
+        Returns
+        -------
+        numpy.ndarray, complex, shape (n, H)
+            Friction force harmonics [N] (along positive pad velocity).
+        """
         period = 2.0 * math.pi / omega
         v = samples_from_harmonics(1j * omega * self._k * x, self.samples, self.speed)
         force = np.empty_like(v)
@@ -194,15 +228,42 @@ class PadBalance:
         return out
 
     def response(self, x, omega: float, friction=None) -> np.ndarray:
-        """Pad and work-piece displacement harmonics (n + 1, H) by (1) and (2) for the
-        friction of pad motion ``x`` (n, H)."""
+        """Return the pad and work-piece displacement harmonics by (1) and (2).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex, shape (n, H)
+            Pad displacement harmonics [m] whose friction acts.
+        omega : float
+            Angular frequency [rad/s].
+        friction : numpy.ndarray, optional
+            Their friction harmonics, when already known.
+
+        Returns
+        -------
+        numpy.ndarray, complex, shape (n + 1, H)
+            Pads, then the work piece [m].
+        """
         g = self._g(omega)
         fr = self.friction_harmonics(x, omega) if friction is None else friction
         n = self.n_pads
         return self._excitation(omega) - np.einsum("oqk,qk->ok", g[:, :n], fr)
 
     def residual(self, y, omega: float) -> np.ndarray:
-        """The residual of (1), real, size n x 2H [m]."""
+        """Return the residual of (1).
+
+        Parameters
+        ----------
+        y : array_like
+            Real unknowns [m].
+        omega : float
+            Angular frequency [rad/s].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n 2H,)
+            [m].
+        """
         x = self.complex_of(y)
         return np.asarray(y, dtype=float) - self.real_of(self.response(x, omega)[:self.n_pads])
 
@@ -276,12 +337,24 @@ class PadBalance:
         return r, jac, (r2 - r) / d
 
     def converged(self, r, y) -> bool:
-        """Whether a residual is small enough (relative to the pad response)."""
+        """Tell whether a residual is small enough (relative to the pad response).
+
+        Parameters
+        ----------
+        r : numpy.ndarray
+            Residual of (1) [m].
+        y : numpy.ndarray
+            The unknowns it belongs to [m].
+
+        Returns
+        -------
+        bool
+        """
         size = max(float(np.linalg.norm(y)), 1e-300)
         return float(np.linalg.norm(r)) <= self.settings.tolerance * size
 
     def solve(self, omega: float, y0=None) -> tuple[np.ndarray, int]:
-        """Newton's method on (1) at a fixed frequency.
+        """Solve (1) at a fixed frequency by Newton's method.
 
         Parameters
         ----------
@@ -321,5 +394,18 @@ class PadBalance:
                                f" Hz within {self.settings.max_iterations} Newton iterations")
 
     def work_piece(self, y, omega: float) -> np.ndarray:
-        """Work-piece displacement harmonics X_wp,1..H [m] of a solution (2)."""
+        """Return the work-piece displacement harmonics of a solution by (2).
+
+        Parameters
+        ----------
+        y : array_like
+            Real unknowns [m].
+        omega : float
+            Angular frequency [rad/s].
+
+        Returns
+        -------
+        numpy.ndarray, complex, shape (H,)
+            X_wp,1..H [m].
+        """
         return self.response(self.complex_of(y), omega)[self.n_pads]

@@ -38,7 +38,7 @@ from .continuation import Branch, ContinuationSettings, continue_in_frequency
 from .linear import pad_receptance
 
 __all__ = ["ComplianceCurve", "NonlinearCompliance", "nonlinear_compliance", "curve_peak",
-           "presliding_guess", "refine_peak", "DEFAULT_BAND"]
+           "presliding_guess", "refine_peak", "require_stable_regime", "DEFAULT_BAND"]
 
 DEFAULT_BAND = (2.0 * math.pi * 10.0, 2.0 * math.pi * 100.0)   # the paper's sweep [rad/s]
 
@@ -51,7 +51,10 @@ def curve_peak(omega, compliance) -> tuple[float, float, int]:
 
     Parameters
     ----------
-    omega, compliance : array_like, shape (K,)
+    omega : array_like, shape (K,)
+        Frequencies [rad/s].
+    compliance : array_like, shape (K,)
+        Values [m/N].
 
     Returns
     -------
@@ -107,6 +110,12 @@ class ComplianceCurve:
     wall_time: float
 
     def to_dict(self) -> dict:
+        """Return the curve as JSON-ready values (SI, Hz in ``_hz`` names).
+
+        Returns
+        -------
+        dict
+        """
         return {"force_pp_n": self.force_pp, "resonance_hz": self.resonance * HZ_PER_RAD_S,
                 "peak_compliance_m_per_n": self.peak,
                 "pad_amplitude_at_peak_m": self.pad_amplitude_at_peak,
@@ -143,10 +152,22 @@ class NonlinearCompliance:
     notes: tuple = field(default=())
 
     def reference_peaks(self) -> dict:
-        """``{name: (resonance [rad/s], peak [m/N])}`` of the linear references."""
+        """Return the peaks of the linear references.
+
+        Returns
+        -------
+        dict
+            ``{name: (resonance [rad/s], peak [m/N])}``.
+        """
         return {k: curve_peak(w, c)[:2] for k, (w, c) in self.references.items()}
 
     def to_dict(self) -> dict:
+        """Return the result as JSON-ready values (SI, Hz in ``_hz`` names).
+
+        Returns
+        -------
+        dict
+        """
         return {
             "axis": self.axis, "speed_m_per_s": self.speed,
             "harmonics": self.settings.harmonics, "aft_samples": self.settings.samples,
@@ -161,7 +182,12 @@ class NonlinearCompliance:
             "notes": list(self.notes)}
 
     def plot(self):
-        """The family of curves over the linear predictions (matplotlib Figure)."""
+        """Plot the family of curves over the linear predictions.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
         from .plot import nonlinear_compliance_plot
 
         return nonlinear_compliance_plot(self)
@@ -187,8 +213,11 @@ def refine_peak(balance: PadBalance, branch: Branch, rounds: int = 3) -> Branch:
     Parameters
     ----------
     balance : PadBalance
+        The balance equations of the branch.
     branch : Branch
+        The continued branch.
     rounds : int
+        Most points added.
 
     Returns
     -------
@@ -235,6 +264,7 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
     Parameters
     ----------
     balance : PadBalance
+        The balance equations.
     omega : float
         Angular frequency [rad/s].
     params : LuGreParameters
@@ -252,6 +282,36 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
     h = np.zeros((n, balance.harmonics), dtype=complex)
     h[:, 0] = x
     return balance.real_of(h)
+
+
+def require_stable_regime(setup, speed: float = 0.0) -> None:
+    """Refuse an axis whose linearised closed loop is unstable in the regime (harmonic balance
+    would return periodic solutions nobody can observe).
+
+    Parameters
+    ----------
+    setup : servotune.simulate.setup.AxisSetup
+        Structure, drive, pads and friction of the axis.
+    speed : float
+        Feed speed [m/s]: 0 checks the presliding contact (at rest), > 0 the LuGre
+        linearisation about sliding at that speed.
+
+    Raises
+    ------
+    servotune.plant.UnstableLoopError
+        (a ValueError) naming the unstable poles.
+    """
+    from ..frequency import require_stable
+    from ..plant import build_plant
+
+    p = setup.lugre
+    if speed > 0.0:
+        contact = Contact.sliding(sliding_linearisation(p, speed), speed)
+        what = f"closed loop feeding at {speed * 1e3:g} mm/s (LuGre linearised about sliding)"
+    else:
+        contact = Contact.stiction(p.sigma0, p.sigma1, p.sigma2)
+        what = "closed loop at rest (LuGre presliding contact)"
+    require_stable(build_plant(setup.structure, setup.drive, contact, setup.pads), what)
 
 
 def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND,
@@ -275,6 +335,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     settings : HarmonicSettings, optional
         Harmonics, AFT samples, tolerance (default 9 harmonics, 256 samples).
     continuation : ContinuationSettings, optional
+        Step control of the continuation.
     law : object, optional
         The pad friction law (axis totals), default LuGre of ``setup``; any law with
         ``periodic_force`` (see :func:`~servotune.harmonic.aft.periodic_friction_force`).

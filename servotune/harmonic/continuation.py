@@ -116,6 +116,7 @@ def continue_in_frequency(balance: PadBalance, omega_start: float, omega_end: fl
     omega_start, omega_end : float
         The band [rad/s], ``0 < omega_start < omega_end``.
     settings : ContinuationSettings, optional
+        Step control.
     y0 : array_like, optional
         Start guess at ``omega_start`` (default: none, see :meth:`PadBalance.solve`).
 
@@ -185,6 +186,10 @@ def continue_in_frequency(balance: PadBalance, omega_start: float, omega_end: fl
                                        f"{omega / (2 * math.pi):.4g} Hz (step below "
                                        f"{cs.step_min / (2 * math.pi):.2g} Hz)")
             continue
+        if ww < omega_start - cs.step_max:
+            raise ConvergenceError(f"the branch turned back below the band start "
+                                   f"({omega_start / (2 * math.pi):.4g} Hz) at "
+                                   f"{omega / (2 * math.pi):.4g} Hz")
         if ww >= omega_end:
             y_end, n_it = balance.solve(omega_end, y + (yy - y) * (omega_end - omega) /
                                         (ww - omega))

@@ -23,6 +23,7 @@ def nonlinear_compliance_plot(result):
     Parameters
     ----------
     result : NonlinearCompliance
+        The curves and references.
 
     Returns
     -------

@@ -87,6 +87,7 @@ def stepped_sine(setup, force_pp: float, omega, speed: float = 0.0, tolerance: f
     Parameters
     ----------
     setup : servotune.simulate.setup.AxisSetup
+        Structure, drive, pads and friction of the axis.
     force_pp : float
         Work-piece force, peak to peak [N].
     omega : array_like
