@@ -18,8 +18,15 @@ from . import frequency
 from .axis import Axis
 from .chatter import stability_lobes
 from .drive import Drive
-from .plant import Contact, UnstableLoopError, build_plant, loop_transfer
-from .units import HZ_PER_RAD_S
+from .plant import (
+    Contact,
+    UnstableLoopError,
+    build_plant,
+    contact_kind,
+    contact_kinds,
+    loop_transfer,
+)
+from .units import HZ_PER_RAD_S, RAD_S_PER_HZ
 
 __all__ = [
     "axis_contact",
@@ -43,37 +50,46 @@ def default_omega(f_min_hz: float = 1.0, f_max_hz: float = 1000.0, n: int = 3000
 def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
                  frequency_hz: float | None = None, speed: float | None = None,
                  c: float | None = None) -> Contact:
-    """The axis' guide-way contact model of a kind.
+    """The axis' guide-way contact model of a kind (:func:`servotune.plant.contact_kinds`).
 
-    ``viscous`` uses ``c`` [N s/m] when given, else the axis' viscous-only value; ``equivalent``
-    needs the vibration ``amplitude`` [m] and ``frequency_hz``; ``sliding`` the ``speed`` [m/s].
+    Parameters
+    ----------
+    axis : Axis
+    kind : str
+        A registered contact kind, e.g. ``"stiction"``, ``"viscous"``, ``"equivalent"``,
+        ``"sliding"``; built from the axis' friction law.
+    amplitude : float, optional
+        Vibration amplitude [m] (``equivalent``).
+    frequency_hz : float, optional
+        Vibration frequency [Hz] (``equivalent``).
+    speed : float, optional
+        Sliding speed [m/s], non-zero (``sliding``).
+    c : float, optional
+        Viscous damping [N s/m] (``viscous``; default the axis' viscous-only value).
+
+    Returns
+    -------
+    Contact
 
     Raises
     ------
     ValueError
-        A parameter the kind needs is missing, or one is given that the kind does not use
-        (the message names the parameters of this function).
+        An unknown kind, a parameter the kind needs is missing, or one is given that the kind
+        does not use (the message names the parameters of this function).
     """
-    uses = {"c": "viscous", "amplitude": "equivalent", "frequency_hz": "equivalent",
-            "speed": "sliding"}
-    for name, value in (("c", c), ("amplitude", amplitude), ("frequency_hz", frequency_hz),
-                        ("speed", speed)):
-        if value is not None and kind != uses[name]:
-            raise ValueError(f"{name} is a parameter of the {uses[name]!r} contact; it has no "
+    spec = contact_kind(kind)
+    values = {"c": c, "amplitude": amplitude, "frequency_hz": frequency_hz, "speed": speed}
+    for name, value in values.items():
+        if value is not None and name not in spec.parameters:
+            user = next(k for k in map(contact_kind, contact_kinds()) if name in k.parameters)
+            raise ValueError(f"{name} is a parameter of the {user.name!r} contact; it has no "
                              f"meaning for the {kind!r} contact")
-    if kind == "equivalent" and (amplitude is None or frequency_hz is None):
-        raise ValueError("the 'equivalent' contact needs the vibration amplitude [m] and "
-                         "frequency_hz [Hz] of the describing function")
-    if kind == "sliding" and not speed:
-        raise ValueError("the 'sliding' contact needs a non-zero sliding speed [m/s]")
     if axis.friction is None:
-        if kind == "free":
-            return Contact.free()
+        if not spec.needs_friction:
+            return spec.build(None, **{p: values[p] for p in spec.parameters})
         axis.pads  # raises the clear error  # noqa: B018
-    if kind == "viscous" and c is not None:
-        return Contact.viscous(c)
-    omega = None if frequency_hz is None else 2 * math.pi * frequency_hz
-    return axis.friction.contact(kind, amplitude=amplitude, omega=omega, v0=speed)
+    omega = None if frequency_hz is None else RAD_S_PER_HZ * frequency_hz
+    return axis.friction.contact(kind, amplitude=amplitude, omega=omega, v0=speed, c=c)
 
 
 def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,
@@ -82,7 +98,7 @@ def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,
     ``drive``), or without control when ``controlled`` is False."""
     drive = (drive or axis.require_drive()) if controlled else None
     pads = axis.pads if axis.friction is not None else ()
-    return build_plant(axis.structure, drive, contact, pads if contact.kind != "free" else ())
+    return build_plant(axis.structure, drive, contact, pads if contact.pads != "free" else ())
 
 
 @dataclass(frozen=True)

@@ -60,7 +60,7 @@ from .drive import (
     kv_from_m_per_min_per_mm,
 )
 from .friction.identify import fit_steady_state, read_friction_csv
-from .friction.lugre import LuGreParameters
+from .friction.law import friction_law, friction_law_names
 from .plant import GuideWayFriction
 from .regimes import Operation
 from .requirements import Requirements
@@ -489,7 +489,8 @@ def _bool(table, key, file, section, default):
 
 
 def _friction(data, structure, folder, file) -> GuideWayFriction | None:
-    table = _table(data, "friction", file, ("pads",), ("lugre", "viscous", "measurements"))
+    laws = friction_law_names()
+    table = _table(data, "friction", file, ("pads",), ("viscous", "measurements", *laws))
     if table is None:
         return None
     pads = table["pads"]
@@ -497,37 +498,44 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
         raise _err(file, "[friction] pads", f"got {pads!r}",
                    'give a list of pad DOF names, e.g. ["pad1.x", "pad2.x"]')
     _check_dofs(structure, pads, file, "[friction] pads")
-    lugre = table.get("lugre", "bianchi2014")
+    # the law: the one key named after a registered law ([friction.<name>]); a number
+    # "viscous" is the viscous-only damping, not the viscous law
+    named = [k for k in table if k in laws and not (k == "viscous"
+                                                     and not isinstance(table[k], dict))]
+    if len(named) > 1:
+        raise _err(file, "[friction]", f"two friction laws {named}", "keep one of them")
+    name = named[0] if named else "lugre"
+    cls = friction_law(name)
     try:
-        if isinstance(lugre, str):
-            params = LuGreParameters.named(lugre)
-        elif isinstance(lugre, dict):
-            params = LuGreParameters(**lugre)
-        else:
-            raise ValueError(f"got {lugre!r}")
+        law = cls.from_table(table.get(name, "bianchi2014"))
     except (TypeError, ValueError, KeyError) as exc:
-        raise _err(file, "[friction] lugre", str(exc),
-                   f"give a named set {LuGreParameters.names()} or a table "
-                   "{fc, fs, vs, delta, sigma0, sigma1, sigma2} in SI units") from None
+        raise _err(file, f"[friction] {name}", str(exc), cls.table_hint) from None
     measurements = table.get("measurements")
     if measurements is not None:
         if not isinstance(measurements, dict) or set(measurements) - {"stribeck"}:
             raise _err(file, "[friction] measurements", f"got {measurements!r}",
                        'give measurements = { stribeck = "stribeck.csv" } (columns v_m_per_s, '
                        "f_n)")
+        params = getattr(law, "lugre_parameters", None)
+        if params is None:
+            raise _err(file, "[friction] measurements", f"given with the {name} law",
+                       "the Stribeck fit identifies LuGre parameters: use [friction.lugre] or "
+                       "remove measurements")
         csv = folder / str(measurements["stribeck"])
         try:
             measured = read_friction_csv(csv)
             if measured.kind != "steady_state":
                 raise ValueError("the file holds no velocity column (v_m_per_s)")
-            params = fit_steady_state(measured.velocity, measured.force, base=params).parameters
+            law = cls(fit_steady_state(measured.velocity, measured.force,
+                                       base=params).parameters)
         except (OSError, ValueError) as exc:
             raise _err(file, "[friction] measurements.stribeck", str(exc),
                        "give a CSV of sliding friction over both velocity signs") from None
+    viscous = table.get("viscous") if not isinstance(table.get("viscous"), dict) else None
     try:
-        return GuideWayFriction(tuple(pads), params,
-                                _number(table, "viscous", file, "friction", positive=False,
-                                        low=0.0, high=1e10, unit="N s/m"))
+        return GuideWayFriction(tuple(pads), viscous=_number(
+            {"viscous": viscous}, "viscous", file, "friction", positive=False, low=0.0,
+            high=1e10, unit="N s/m"), law=law)
     except ValueError as exc:
         raise _err(file, "[friction]", str(exc), "fix the values") from None
 

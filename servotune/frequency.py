@@ -478,9 +478,9 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
     omega = _omega(omega)
     contact = Contact.free() if contact is None else contact
     pads = list(pads)
-    if contact.kind == "locked":
+    if contact.pads == "locked":
         structure = structure.locked(pads)
-    if contact.kind in ("locked", "free"):
+    if contact.pads != "contact":
         pads = []
     outputs = list(outputs)
     n_dof = structure.n
@@ -512,7 +512,7 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
     gh = np.empty((omega.size, n_u, n_u), dtype=complex)
     u = np.empty((omega.size, n_u), dtype=complex)
     if pads:
-        if contact.kind == "sliding":
+        if contact.system is not None:
             z = _tf_values(control.tf(contact.system), s) * s
         else:
             z = contact.stiffness + s * contact.damping

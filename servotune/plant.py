@@ -20,14 +20,17 @@ Plant outputs: ``wp_x``, ``wp_y``, ``wp_z`` [m], ``slide_x`` [m] (the position f
 signal), ``omega_motor`` [rad/s], ``following_error`` [m], ``torque`` [N m], ``current`` [A].
 
 Guide-way friction is linearised per pad (all axis friction is lumped at the pads, paper sec 3;
-the values of a :class:`Contact` are axis totals shared equally by the pads):
+the values of a :class:`Contact` are axis totals shared equally by the pads). The kinds of
+contact are registered (:func:`register_contact_kind`, :func:`contact_kinds`) and built from the
+axis' friction law (:class:`servotune.friction.law.FrictionLaw`), whatever law it is:
 
 - ``locked``: the pads are held rigidly (the pad DOFs are removed);
-- ``stiction``: the LuGre presliding linearisation, a spring sigma0 with a damper
-  sigma1 + sigma2;
+- ``stiction``: the law's presliding contact (LuGre: a spring sigma0 with a damper
+  sigma1 + sigma2);
 - ``viscous``: a damper C;
-- ``equivalent``: the describing function at a vibration amplitude, Ceq with Keq (Eq 8-10);
-- ``sliding``: the LuGre linearisation about a sliding speed v0, a first-order dynamic element;
+- ``equivalent``: the law's describing function at a vibration amplitude, Ceq with Keq
+  (Eq 8-10);
+- ``sliding``: the law linearised about a sliding speed v0, a dynamic element;
 - ``free``: no contact force.
 
 References
@@ -44,16 +47,25 @@ from dataclasses import dataclass, field
 import control
 import numpy as np
 
+from .contact_kinds import (
+    CONTACT_PARAMETERS,
+    ContactKind,
+    ContactParameter,
+    contact_kind,
+    contact_kinds,
+    register_contact_kind,
+)
 from .drive import Drive, drive_blocks
-from .friction.equivalent import describing_function
-from .friction.lugre import LuGreParameters, sliding_linearisation
+from .friction.law import FrictionLaw, friction_law, friction_law_names
+from .friction.lugre import LuGreParameters
 from .interconnect import connect
 from .structure.model import ModalModel, signal_name
+from .units import HZ_PER_RAD_S
 
-__all__ = ["Contact", "GuideWayFriction", "build_plant", "loop_transfer", "CONTACT_KINDS",
-           "UnstableLoopError"]
+__all__ = ["Contact", "ContactKind", "ContactParameter", "GuideWayFriction", "build_plant",
+           "loop_transfer", "CONTACT_KINDS", "CONTACT_PARAMETERS", "UnstableLoopError",
+           "contact_kind", "contact_kinds", "register_contact_kind"]
 
-CONTACT_KINDS = ("locked", "stiction", "viscous", "equivalent", "sliding", "free")
 WP_DOFS = ("wp.x", "wp.y", "wp.z")
 
 
@@ -68,16 +80,22 @@ class Contact:
     Parameters
     ----------
     kind : str
-        One of :data:`CONTACT_KINDS`.
+        A registered kind (:func:`contact_kinds`).
     stiffness : float
-        Total contact stiffness [N/m] (stiction: sigma0; equivalent: Keq).
+        Total contact stiffness [N/m] (stiction: the presliding spring; equivalent: Keq).
     damping : float
-        Total contact damping [N s/m] (stiction: sigma1 + sigma2; viscous: C; equivalent: Ceq).
+        Total contact damping [N s/m] (stiction: the presliding damper; viscous: C;
+        equivalent: Ceq).
     system : control.StateSpace, optional
-        For ``sliding``: the total contact as a SISO system from pad velocity [m/s] to friction
-        force [N] (e.g. the LuGre sliding linearisation).
+        A dynamic contact (e.g. ``sliding``): the total contact as a SISO system from pad
+        velocity [m/s] to friction force [N]; it replaces stiffness and damping.
     note : str
         Where the values came from (shown in reports).
+
+    Raises
+    ------
+    ValueError
+        Unknown kind, negative or non-finite stiffness or damping, a system that is not SISO.
 
     Examples
     --------
@@ -92,21 +110,24 @@ class Contact:
     note: str = ""
 
     def __post_init__(self) -> None:
-        if self.kind not in CONTACT_KINDS:
-            raise ValueError(f"Contact.kind must be one of {CONTACT_KINDS}, got {self.kind!r}")
+        contact_kind(self.kind)
         for name in ("stiffness", "damping"):
             value = float(getattr(self, name))
             if not math.isfinite(value) or value < 0.0:
                 raise ValueError(f"Contact.{name} must be finite and >= 0, got {value!r}; a "
                                  "negative value would make the guide way generate energy")
             object.__setattr__(self, name, value)
-        if self.kind == "sliding":
-            if self.system is None:
-                raise ValueError("a sliding contact needs its linearised system (v -> F)")
+        if self.system is not None:
             sys = control.ss(self.system)
             if sys.ninputs != 1 or sys.noutputs != 1:
-                raise ValueError("the sliding contact system must be SISO (velocity -> force)")
+                raise ValueError(f"the {self.kind} contact system must be SISO (velocity -> "
+                                 "force)")
             object.__setattr__(self, "system", sys)
+
+    @property
+    def pads(self) -> str:
+        """``"contact"``, ``"locked"`` or ``"free"`` (:attr:`ContactKind.pads`)."""
+        return contact_kind(self.kind).pads
 
     @classmethod
     def locked(cls) -> Contact:
@@ -140,6 +161,8 @@ class Contact:
     @classmethod
     def sliding(cls, system, v0: float | None = None) -> Contact:
         """Sliding linearisation: a SISO system from pad velocity to friction force (total)."""
+        if system is None:
+            raise ValueError("a sliding contact needs its linearised system (v -> F)")
         at = f" at v0 = {v0:.3g} m/s" if v0 is not None else ""
         return cls("sliding", system=system, note=f"sliding{at}")
 
@@ -148,12 +171,16 @@ class Contact:
         DOF (minus the friction force)."""
         x, v, f = signal_name(pad), signal_name(pad, "v_"), signal_name(pad, "f_")
         name = f"contact_{signal_name(pad)}"
-        if self.kind == "sliding":
+        if self.system is not None:
             share = control.ss(self.system) * (-1.0 / n_pads)
             return control.ss(share.A, share.B, share.C, share.D, inputs=[v], outputs=[f],
                               name=name)
         gain = [[-self.stiffness / n_pads, -self.damping / n_pads]]
         return control.ss([], [], [], gain, inputs=[x, v], outputs=[f], name=name)
+
+
+#: The contact kinds built in (:func:`contact_kinds` has those registered since).
+CONTACT_KINDS = contact_kinds()
 
 
 @dataclass(frozen=True)
@@ -164,22 +191,49 @@ class GuideWayFriction:
     ----------
     pads : tuple of str
         Relative-X DOFs of the pads; the friction is shared equally among them.
-    lugre : LuGreParameters
-        Axis-total LuGre parameters.
-    viscous : float
-        Axis-total damping of the viscous-only model [N s/m] (default: sigma2).
+    lugre : LuGreParameters, optional
+        Axis-total LuGre parameters: the law is then :class:`~servotune.friction.laws.lugre.
+        LuGreFriction`. Filled in from ``law`` when that is LuGre, else None.
+    viscous : float, optional
+        Axis-total damping of the viscous-only model [N s/m] (default: the law's viscous part,
+        :attr:`~servotune.friction.law.FrictionLaw.viscous_part`).
+    law : FrictionLaw, optional
+        The friction law (axis totals), any registered one (:func:`servotune.friction.law.
+        friction_law`); give it or ``lugre``.
+
+    Raises
+    ------
+    ValueError
+        Pads not distinct, neither or conflicting ``lugre`` and ``law``, a negative viscous
+        damping.
     """
 
     pads: tuple[str, ...]
-    lugre: LuGreParameters
+    lugre: LuGreParameters | None = None
     viscous: float | None = None
+    law: FrictionLaw | None = None
 
     def __post_init__(self) -> None:
         pads = tuple(self.pads)
         if not pads or len(set(pads)) != len(pads):
             raise ValueError(f"GuideWayFriction.pads must be distinct DOF names, got {pads!r}")
         object.__setattr__(self, "pads", pads)
-        viscous = self.lugre.sigma2 if self.viscous is None else float(self.viscous)
+        law = self.law
+        if law is None:
+            if not isinstance(self.lugre, LuGreParameters):
+                raise ValueError("GuideWayFriction needs a friction law (law=...) or LuGre "
+                                 "parameters (lugre=LuGreParameters(...))")
+            law = friction_law("lugre")(self.lugre)
+        elif not isinstance(law, FrictionLaw):
+            raise ValueError(f"GuideWayFriction.law must be a FrictionLaw (one of "
+                             f"{friction_law_names()}), got {law!r}")
+        lugre = getattr(law, "lugre_parameters", None)
+        if self.lugre is not None and lugre != self.lugre:
+            raise ValueError("GuideWayFriction: give the friction law or the LuGre parameters, "
+                             "not both")
+        object.__setattr__(self, "law", law)
+        object.__setattr__(self, "lugre", lugre)
+        viscous = law.viscous_part if self.viscous is None else float(self.viscous)
         if not (viscous >= 0 and math.isfinite(viscous)):
             raise ValueError(f"GuideWayFriction.viscous must be finite and >= 0 N s/m, got "
                              f"{self.viscous!r}")
@@ -187,37 +241,42 @@ class GuideWayFriction:
 
     @property
     def per_pad(self) -> LuGreParameters:
-        """One pad's share of the LuGre parameters."""
+        """One pad's share of the LuGre parameters (a LuGre law only)."""
+        if self.lugre is None:
+            raise ValueError(f"the axis' friction law is {self.law.name!r}, not LuGre")
         return self.lugre.scaled(1.0 / len(self.pads))
 
     def contact(self, kind: str, amplitude: float | None = None, omega: float | None = None,
-                v0: float | None = None) -> Contact:
-        """The linear contact model of a kind (see :data:`CONTACT_KINDS`).
+                v0: float | None = None, c: float | None = None) -> Contact:
+        """The linear contact model of a kind (see :func:`contact_kinds`).
 
-        ``stiction`` uses sigma0 and sigma1 + sigma2; ``viscous`` the viscous-only damping;
-        ``equivalent`` the LuGre describing function at a vibration ``amplitude`` [m] and
-        ``omega`` [rad/s] (Ceq and Keq); ``sliding`` the LuGre linearisation at speed ``v0``.
+        ``stiction`` is the law's presliding contact; ``viscous`` the viscous-only damping (or
+        ``c`` [N s/m]); ``equivalent`` the law's describing function at a vibration
+        ``amplitude`` [m] and ``omega`` [rad/s] (Ceq and Keq); ``sliding`` the law linearised
+        at speed ``v0`` [m/s].
+
+        Raises
+        ------
+        ValueError
+            Unknown kind, or a parameter the kind needs is missing.
         """
-        p = self.lugre
-        if kind == "locked":
-            return Contact.locked()
-        if kind == "free":
-            return Contact.free()
-        if kind == "stiction":
-            return Contact.stiction(p.sigma0, p.sigma1, p.sigma2)
-        if kind == "viscous":
-            return Contact.viscous(self.viscous)
-        if kind == "equivalent":
-            if amplitude is None or omega is None:
-                raise ValueError("the describing-function contact needs amplitude [m] and "
-                                 "omega [rad/s]")
-            ceq, keq = describing_function(p, amplitude, omega)
-            return Contact.equivalent(float(ceq), max(float(keq), 0.0), amplitude)
-        if kind == "sliding":
-            if v0 is None or v0 == 0:
-                raise ValueError("the sliding contact needs a non-zero speed v0 [m/s]")
-            return Contact.sliding(sliding_linearisation(p, v0), v0)
-        raise ValueError(f"contact kind must be one of {CONTACT_KINDS}, got {kind!r}")
+        spec = contact_kind(kind)
+        values = {"c": c, "amplitude": amplitude, "speed": v0,
+                  "frequency_hz": None if omega is None else HZ_PER_RAD_S * omega}
+        missing = spec.missing(values)
+        if missing:
+            raise ValueError(f"the {kind!r} contact needs {_listing(spec.required)} "
+                             f"({spec.purpose})")
+        return spec.build(self, **{p: values[p] for p in spec.parameters})
+
+
+def _listing(names) -> str:
+    """'a non-zero speed [m/s]', 'amplitude [m] and frequency_hz [Hz]'."""
+    words = []
+    for name in names:
+        p = CONTACT_PARAMETERS[name]
+        words.append(f"{'a non-zero ' if p.nonzero else ''}{name} [{p.unit}]")
+    return " and ".join(words)
 
 
 def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None, pads):
@@ -225,11 +284,11 @@ def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None,
     contact = Contact.free() if contact is None else contact
     pads = list(pads)
     structure.index(pads)  # clear error for unknown pad DOFs
-    if contact.kind != "free" and not pads:
+    if contact.pads != "free" and not pads:
         raise ValueError(f"a {contact.kind!r} contact needs the pad DOFs (pads=...)")
-    if contact.kind == "locked":
+    if contact.pads == "locked":
         structure = structure.locked(pads)
-    if contact.kind in ("locked", "free"):
+    if contact.pads != "contact":
         pads = []
     have = set(structure.dofs)
     wp = [d for d in WP_DOFS if d in have]

@@ -455,7 +455,7 @@ def test_axis_contact_names_its_own_parameters():
     axis = load_axis(MODELS / "paper_x_axis")
     with pytest.raises(ValueError, match=r"amplitude .* and frequency_hz"):
         axis_contact(axis, "equivalent", amplitude=2e-6)
-    with pytest.raises(ValueError, match="non-zero sliding speed"):
+    with pytest.raises(ValueError, match="non-zero speed"):
         axis_contact(axis, "sliding", speed=0.0)
     with pytest.raises(ValueError, match="speed is a parameter of the 'sliding' contact"):
         axis_contact(axis, "locked", speed=0.03)

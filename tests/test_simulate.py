@@ -244,9 +244,9 @@ def test_micro_damping_law_gives_the_lugre_force_and_bristle_rate(speed):
     # the compiled remainders fed into the pad block reproduce the numpy model of
     # servotune.friction (force and dz/dt) at random states, whatever the operating point
     from servotune.friction import lugre_derivative, lugre_force
-    from servotune.simulate.contact import LAW_IDS, evaluate_remainder
     law = LuGreFriction(P_VD)
-    assert law.law_id == LAW_IDS["lugre_damping"] and law.n_remainders == 2
+    remainder = law.remainder()
+    assert law.n_remainders == 2
     n_pads = 4
     block = law.pad_block("pad1.x", n_pads, speed)
     assert block.input_labels == ["v_pad1_x", "r_pad1_x", "q_pad1_x", "one"]
@@ -255,8 +255,8 @@ def test_micro_damping_law_gives_the_lugre_force_and_bristle_rate(speed):
     for _ in range(40):
         v = rng.uniform(-4, 4) * P.vs
         z = rng.uniform(-1.2, 1.2) * P.fs / P.sigma0
-        r = evaluate_remainder(law.law_id, 0, v, z, p)[0]
-        q = evaluate_remainder(law.law_id, 1, v, z, p)[0]
+        r = remainder(0, v, z, p)[0]
+        q = remainder(1, v, z, p)[0]
         u = np.array([v, r, q, 1.0])
         zdot = float(block.A[0, 0] * z + block.B[0] @ u)
         force = float(block.C[1, 0] * z + block.D[1] @ u)
@@ -267,8 +267,8 @@ def test_micro_damping_law_gives_the_lugre_force_and_bristle_rate(speed):
 
 
 def test_micro_damping_remainder_derivatives_match_central_differences():
-    from servotune.simulate.contact import evaluate_remainder
     law = LuGreFriction(P_VD)
+    remainder = law.remainder()
     rng = np.random.default_rng(6)
     for speed in (0.0, 0.03):
         p = law.remainder_parameters(speed)
@@ -277,11 +277,11 @@ def test_micro_damping_remainder_derivatives_match_central_differences():
             z = rng.uniform(-1.2, 1.2) * P.fs / P.sigma0
             hv, hz = 1e-7 * P.vs, 1e-7 * P.fs / P.sigma0
             for comp in (0, 1):
-                _, dv, dz = evaluate_remainder(law.law_id, comp, v, z, p)
-                fd_v = (evaluate_remainder(law.law_id, comp, v + hv, z, p)[0]
-                        - evaluate_remainder(law.law_id, comp, v - hv, z, p)[0]) / (2 * hv)
-                fd_z = (evaluate_remainder(law.law_id, comp, v, z + hz, p)[0]
-                        - evaluate_remainder(law.law_id, comp, v, z - hz, p)[0]) / (2 * hz)
+                _, dv, dz = remainder(comp, v, z, p)
+                fd_v = (remainder(comp, v + hv, z, p)[0]
+                        - remainder(comp, v - hv, z, p)[0]) / (2 * hv)
+                fd_z = (remainder(comp, v, z + hz, p)[0]
+                        - remainder(comp, v, z - hz, p)[0]) / (2 * hz)
                 assert_allclose(dv, fd_v, rtol=1e-5, atol=1e-6)
                 assert_allclose(dz, fd_z, rtol=1e-5, atol=1e-6 * P.sigma0 * P.vs / P.fs)
 

@@ -299,7 +299,6 @@ def show_progress(args) -> bool:
         return False
 
 
-CONTACT_KINDS = ("locked", "stiction", "viscous", "equivalent", "sliding", "free")
 _DAMPING = number(0.0, 1e12, example="5e5", unit="N s/m")
 _AMPLITUDE = number(0.0, 0.1, low_open=True, example="2e-6", unit="m")
 _FREQUENCY = number(0.0, 1e5, low_open=True, example=50, unit="Hz")
@@ -308,12 +307,12 @@ _SPEED = number(-10.0, 10.0, example=0.03, unit="m/s")
 
 def add_contact_options(parser, default: str = "viscous") -> None:
     """``--contact`` and its parameters, as the analysis subcommands spell them."""
-    parser.add_argument("--contact", choices=CONTACT_KINDS, default=default,
-                        help="guide-way model: locked pads, stiction (LuGre presliding spring "
-                             "and damper), viscous (the axis' viscous-only damping, or --c), "
-                             "equivalent (LuGre describing function at --amplitude and "
-                             "--frequency-hz), sliding (LuGre linearised at --speed), free "
-                             f"(default {default})")
+    from ..contact_kinds import contact_kind, contact_kinds
+
+    kinds = "; ".join(f"{k}: {contact_kind(k).summary}" for k in contact_kinds())
+    parser.add_argument("--contact", choices=contact_kinds(), default=default,
+                        help=f"guide-way model, built from the axis' friction law ({kinds}; "
+                             f"default {default})")
     parser.add_argument("--c", type=_DAMPING, default=None,
                         help="viscous guide-way damping C [N s/m] (axis total), "
                              f"{_DAMPING.accepted}; only with --contact viscous")
@@ -345,29 +344,22 @@ def check_contact_args(args) -> None:
     ------
     CliError
     """
+    from ..contact_kinds import CONTACT_PARAMETERS, contact_kind, contact_kinds
+
     kind = args.contact
-    for flag, value, user in (("--c", args.c, "viscous"),
-                              ("--amplitude", args.amplitude, "equivalent"),
-                              ("--frequency-hz", args.frequency_hz, "equivalent"),
-                              ("--speed", args.speed, "sliding")):
-        if value is not None and kind != user:
-            what = {"viscous": "the viscous damping of --contact viscous",
-                    "equivalent": "the vibration of --contact equivalent (the describing "
-                                  "function)",
-                    "sliding": "the sliding speed of --contact sliding"}[user]
-            raise CliError(f"{flag} sets {what}; it has no meaning with --contact {kind}: "
-                           f"drop it or use --contact {user}")
-    if kind == "equivalent":
-        missing = [flag for flag, value in (("--amplitude", args.amplitude),
-                                            ("--frequency-hz", args.frequency_hz))
-                   if value is None]
-        if missing:
-            raise CliError(f"--contact equivalent needs {' and '.join(missing)}: the vibration "
-                           "amplitude [m] and frequency [Hz] of the describing function, e.g. "
-                           "--amplitude 2e-6 --frequency-hz 50")
-    if kind == "sliding" and not args.speed:
-        raise CliError("--contact sliding needs a non-zero --speed: the sliding speed [m/s] "
-                       "of the linearisation, e.g. --speed 0.03")
+    spec = contact_kind(kind)
+    values = {name: getattr(args, name, None) for name in CONTACT_PARAMETERS}
+    for name, value in values.items():
+        if value is not None and name not in spec.parameters:
+            param = CONTACT_PARAMETERS[name]
+            user = next(k for k in contact_kinds() if name in contact_kind(k).parameters)
+            raise CliError(f"{param.flag} sets {param.what} of --contact {user}; it has no "
+                           f"meaning with --contact {kind}: drop it or use --contact {user}")
+    missing = spec.missing(values)
+    if missing:
+        flags = " and ".join(("a non-zero " if CONTACT_PARAMETERS[n].nonzero else "")
+                             + CONTACT_PARAMETERS[n].flag for n in missing)
+        raise CliError(f"--contact {kind} needs {flags}: {spec.purpose}, e.g. {spec.example}")
 
 
 def contact_from_args(axis, args):

@@ -82,7 +82,7 @@ def run(args) -> int:
     with progress.task(f"{axis.name}: compliance curves"):
         for c in [contact] + [x for x in (Contact.locked(), Contact.free())
                               if x.kind != contact.kind and axis.friction is not None]:
-            if controlled or c.kind != "free":  # uncontrolled free pads: no static stiffness
+            if controlled or c.pads != "free":  # uncontrolled free pads: no static stiffness
                 curves.append(analysis.compliance_curve(axis, c))
         if fig9:
             fig9_curves = analysis.uncontrolled_compliance(axis, FIG9_C)

@@ -51,17 +51,22 @@ Comput. 33 (2011) 488-511 (phi-functions from one exponential of an augmented ma
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
+import inspect
 import math
+import os
+import sys
+import textwrap
 from dataclasses import dataclass
+from pathlib import Path
 
 import numba
 import numpy as np
 import scipy.linalg
 
-from .contact import evaluate_remainder
-
 __all__ = ["ModalForm", "modal_form", "StepWeights", "step_weights", "phi_functions",
-           "integrate_chunk", "sum_of_squares", "MAX_LEVEL", "N_POWERS"]
+           "chunk_kernel", "integrate_chunk", "sum_of_squares", "MAX_LEVEL", "N_POWERS"]
 
 MAX_LEVEL = 8          # steps are halved at most this many times (h/256)
 C1 = 1.0 / 3.0         # first Radau point (the second is 1)
@@ -340,13 +345,26 @@ def _powers(xr, xm, u, r2, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads,
     out[3] = p_damp
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@numba.njit(cache=True)
+def _no_remainder(component, v, z, p):
+    """The remainder of a law without one (never called: such a law has no remainder input)."""
+    return math.nan, math.nan, math.nan
+
+
+# the name the kernel calls; chunk_kernel() compiles the kernel with the law's remainder here
+_remainder = _no_remainder
+
+
 def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
                     but_re, but_im, brt_re, brt_im, cyt_re, cyt_im, prop_re, prop_im, alpha_re,
-                    alpha_im, beta_re, beta_im, kmat, kerr, law, rparams, r_tol,
+                    alpha_im, beta_re, beta_im, kmat, kerr, rparams, r_tol,
                     err_scale, tol, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads,
                     cot_re, cot_im, dou, dor, rec_out, rec_energy, stats):
-    """Integrate the base steps n0..n1-1 (of length h) in place.
+    """Integrate the base steps n0..n1-1 (of length h) in place (the kernel's source).
+
+    The compiled kernel of a friction law is :func:`chunk_kernel` ``(law.remainder())``: this
+    function's source compiled with ``_remainder`` the law's remainder. Remainder input k is
+    component ``k // n_pads`` of the law, evaluated at the velocity and state rows of input k.
 
     State: modal coordinates ``xr + i xm``, the last stage remainders ``r_last`` (2 n_r),
     cumulative works ``energy`` (4) and current powers ``power`` (4); ``level`` is the current
@@ -456,8 +474,8 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
                 for st in range(2):
                     for p in range(nr):
                         row = st * nr + p
-                        val, a_v, a_z = evaluate_remainder(law, p // n_pads, y[st, p],
-                                                           y[st, nr + p], rparams)
+                        val, a_v, a_z = _remainder(p // n_pads, y[st, p], y[st, nr + p],
+                                                   rparams)
                         res[row] = val - rr[row]
                         dv[row] = a_v
                         dz[row] = a_z
@@ -558,3 +576,118 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
                     rec_energy[n_rec, q] = energy[q]
                 n_rec += 1
     return n1 - n0, level
+
+
+# ------------------------------------------------------------------------------------------
+# one compiled kernel per friction law
+
+_KERNELS: dict = {}
+
+
+def _code_names(code) -> set:
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if hasattr(const, "co_names"):
+            names |= _code_names(const)
+    return names
+
+
+def _compiled_sources(dispatcher, files: dict) -> dict:
+    """The source files of a numba function and of every compiled function it calls, found
+    through its global names (recursively), with their contents."""
+    py = dispatcher.py_func
+    path = inspect.getsourcefile(py)
+    if path in files:
+        return files
+    files[path] = Path(path).read_bytes()
+    for name in sorted(_code_names(py.__code__)):
+        obj = py.__globals__.get(name)
+        if isinstance(obj, numba.core.dispatcher.Dispatcher):
+            _compiled_sources(obj, files)
+    return files
+
+
+def _kernel_directory() -> Path:
+    """Where the generated kernel modules are written (numba caches next to them)."""
+    env = os.environ.get("SERVOTUNE_KERNEL_DIR")
+    candidates = [Path(env)] if env else []
+    candidates += [Path(__file__).parent / "__pycache__" / "kernels",
+                   Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
+                   / "servotune" / "kernels"]
+    for folder in candidates:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(folder, os.W_OK):
+            return folder
+    raise OSError(f"no writable folder for the compiled kernels among "
+                  f"{[str(c) for c in candidates]}; set SERVOTUNE_KERNEL_DIR")
+
+
+def chunk_kernel(remainder=None):
+    """The compiled :func:`integrate_chunk` of a friction law's remainder.
+
+    Parameters
+    ----------
+    remainder : numba dispatcher, optional
+        The law's compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``, a
+        module-level ``numba.njit`` function (:meth:`servotune.friction.law.FrictionLaw.remainder`);
+        None for a law without one.
+
+    Returns
+    -------
+    numba dispatcher
+        :func:`integrate_chunk` compiled with the remainder called directly (a direct call is
+        several times faster than a function passed as an argument), cached on disk by numba.
+
+    Notes
+    -----
+    The kernel is the source of :func:`integrate_chunk` in a generated module that imports the
+    remainder by name, written once into a kernel folder (``SERVOTUNE_KERNEL_DIR``, else this
+    package's ``__pycache__/kernels``, else ``~/.cache/servotune/kernels``). numba's on-disk
+    cache checks only the time stamp of a cached function's own file, not of the functions it
+    calls; so the module's name carries a hash of this file and of the source files of the
+    remainder and of every compiled function it calls (found through their global names), and
+    of the numba version: a changed or new law gets a new module and is compiled afresh, never
+    served stale code. No law is listed anywhere: any registered law's remainder can be passed.
+    """
+    remainder = _no_remainder if remainder is None else remainder
+    if not isinstance(remainder, numba.core.dispatcher.Dispatcher):
+        raise TypeError(f"the remainder must be a numba.njit function, got {remainder!r}")
+    key = id(remainder)
+    if key in _KERNELS and _KERNELS[key][0] is remainder:
+        return _KERNELS[key][1]
+    module_name = remainder.py_func.__module__
+    func_name = remainder.py_func.__name__
+    if getattr(sys.modules.get(module_name), func_name, None) is not remainder:
+        raise TypeError(f"the remainder {module_name}.{func_name} must be a module-level "
+                        f"function of its module, importable by that name")
+    files = _compiled_sources(remainder, {})
+    files[__file__] = Path(__file__).read_bytes()
+    digest = hashlib.sha256()
+    for path in sorted(files):
+        digest.update(path.encode() + b"\0" + files[path] + b"\0")
+    digest.update(f"{module_name}.{func_name} numba {numba.__version__}".encode())
+    tag = f"{module_name.rsplit('.', 1)[-1]}_{func_name}_{digest.hexdigest()[:16]}"
+    source = textwrap.dedent(inspect.getsource(integrate_chunk))
+    text = (f'"""Generated by servotune.simulate.integrator.chunk_kernel for '
+            f'{module_name}.{func_name}."""\n\n'
+            f"import math\n\nimport numba\nimport numpy as np\n\n"
+            f"from servotune.simulate.integrator import (C1, MAX_NEWTON, _FAST, _powers,\n"
+            f"                                          _solve_small, _u_into)\n"
+            f"from {module_name} import {func_name} as _remainder\n\n\n"
+            f"@numba.njit(cache=True, fastmath=_FAST)\n{source}")
+    path = _kernel_directory() / f"_kernel_{tag}.py"
+    if not path.exists() or path.read_text() != text:
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    name = f"servotune_kernel_{tag}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    kernel = module.integrate_chunk
+    _KERNELS[key] = (remainder, kernel)
+    return kernel

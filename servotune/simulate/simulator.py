@@ -34,7 +34,7 @@ import numpy as np
 from ..drive import Drive
 from ..structure.model import ModalModel, signal_name
 from . import integrator
-from .contact import PadFriction, evaluate_remainder, lugre_remainder
+from .contact import PadFriction
 from .result import SimulationError, SimulationResult
 from .scenario import Scenario
 from .system import AxisSystem, axis_system
@@ -183,8 +183,8 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     # the remainders at rest (v = z = 0); remainder input k is component k // n_pads
     r_last = np.zeros(2 * nr)
     for k in range(nr):
-        r_last[k] = r_last[nr + k] = evaluate_remainder(data["law"], k // n_pads_power, 0.0,
-                                                        0.0, rparams)[0]
+        r_last[k] = r_last[nr + k] = data["remainder"](k // n_pads_power, 0.0, 0.0,
+                                                       rparams)[0]
     energy = np.zeros(integrator.N_POWERS)
     power = np.zeros(integrator.N_POWERS)
     integrator._powers(xr, xm, samples[0], r_last[nr:], data["cpt_re"], data["cpt_im"],
@@ -217,8 +217,7 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
         cps_work.append(energy.copy())
         # (no BLAS here: waking its threads between kernel calls costs milliseconds)
         cps_struct.append(0.5 * integrator.sum_of_squares(*data["energy_rows"], xr, xm))
-        cps_bristle.append(0.5 * data["sigma0_pad"] * integrator.sum_of_squares(
-            *data["bristle_rows"], xr, xm))
+        cps_bristle.append(0.5 * integrator.sum_of_squares(*data["bristle_rows"], xr, xm))
 
     checkpoint(0)
     failed_at = None
@@ -228,13 +227,14 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
         data["bu"].T, data["br"].T, data["cy"].T, w.prop, w.alpha, w.beta)
         for part in (a.real, a.imag))
     kernel_time = 0.0
+    kernel = integrator.chunk_kernel(data["remainder"])
     for n0, n1 in itertools.pairwise(bounds):
         tk = time.perf_counter()
         out = rec[1 + n0 // record_every:1 + n1 // record_every]
         out_w = rec_work[1 + n0 // record_every:1 + n1 // record_every]
-        done, level = integrator.integrate_chunk(
+        done, level = kernel(
             h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
-            *data["split"], w.kmat, w.kerr, data["law"], rparams,
+            *data["split"], w.kmat, w.kerr, rparams,
             data["r_tol"], data["err_scale"], tolerance, data["cpt_re"], data["cpt_im"],
             data["dpu"], data["dpr"], data["n_force"], data["force_idx"], n_pads_power,
             data["cot_re"], data["cot_im"], data["dou"], data["dor"], out, out_w, stats)
@@ -289,9 +289,8 @@ def _prepare(sysm: AxisSystem, h: float, axis: NonlinearAxis, scenario: Scenario
     bu = np.ascontiguousarray(left @ b[:, :nu])
     br = np.ascontiguousarray(left @ b[:, nu:])
     nr = br.shape[1]
-    # the pad outputs each remainder input depends on: remainder k belongs to pad k % n_pads
-    owner = np.arange(nr) % max(len(sysm.pads), 1)
-    cy = np.ascontiguousarray(np.vstack([sysm.pad_velocity[owner], sysm.pad_state[owner]])
+    # the velocity and state each remainder input reads (remainder k: pad k % n_pads)
+    cy = np.ascontiguousarray(np.vstack([sysm.remainder_velocity, sysm.remainder_state])
                               @ vec) if nr else np.zeros((0, vec.shape[1]), dtype=complex)
     weights = integrator.step_weights(form.lam, h, (cy, br) if nr else None)
     n_pads = len(sysm.pads)
@@ -309,17 +308,16 @@ def _prepare(sysm: AxisSystem, h: float, axis: NonlinearAxis, scenario: Scenario
     c, d = sysm.system.C, sysm.system.D
     friction = axis.friction
     if nr:
-        rparams = friction.remainder_parameters(scenario.speed)
+        rparams = np.ascontiguousarray(friction.remainder_parameters(scenario.speed),
+                                       dtype=float)
         remainder = friction.remainder()
-        law = friction.law_id
-        p = friction.params
-        # Newton tolerance on r [m/s]: a force error 1e-10 Fc through sigma1 + sigma0 h
-        r_tol = 1e-10 * p.fc / (p.sigma1 + p.sigma0 * h)
-        sigma0_pad = p.sigma0 / n_pads
-        # error scales of the pad outputs: the Stribeck velocity and the presliding deflection
-        err_scale = np.concatenate([np.full(nr, p.vs), np.full(nr, p.fs / p.sigma0)])
+        r_tol = friction.newton_tolerance(h)
+        # error scales of the remainders' velocities and states (by component)
+        v_scale, z_scales = friction.error_scales()
+        err_scale = np.concatenate([np.full(nr, v_scale),
+                                    np.repeat(np.asarray(z_scales, dtype=float), n_pads)])
     else:
-        rparams, remainder, r_tol, sigma0_pad, law = np.zeros(8), lugre_remainder, 0.0, 0.0, -1
+        rparams, remainder, r_tol = np.zeros(1), None, 0.0
         err_scale = np.zeros(0)
     return {"lam": form.lam, "vectors": vec, "condition": form.condition, "bu": bu, "br": br,
             "cy": cy, "w": weights, "cpt_re": np.ascontiguousarray(cp.T.real),
@@ -329,10 +327,9 @@ def _prepare(sysm: AxisSystem, h: float, axis: NonlinearAxis, scenario: Scenario
             "cot_im": np.ascontiguousarray((c @ vec).T.imag),
             "dou": np.ascontiguousarray(d[:, :nu]),
             "dor": np.ascontiguousarray(d[:, nu:]), "rparams": rparams,
-            "remainder": remainder, "r_tol": r_tol, "sigma0_pad": sigma0_pad,
-            "err_scale": err_scale, "law": law,
+            "remainder": remainder, "r_tol": r_tol, "err_scale": err_scale,
             "energy_rows": _split(sysm.energy_rows @ vec),
-            "bristle_rows": _split(sysm.pad_state @ vec if nr else np.zeros((0, vec.shape[1])))}
+            "bristle_rows": _split(sysm.spring_rows @ vec)}
 
 
 def _split(a):

@@ -19,6 +19,7 @@ distributed damping ``v^T D v``, of the motor torque and of the work-piece force
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import control
@@ -53,7 +54,14 @@ class AxisSystem:
     nonlinear : bool
         Whether the pads carry a nonlinear remainder.
     pad_velocity, pad_state : (n_pads, n) arrays
-        Rows giving v_p and z_p from X (no feed-through).
+        Rows giving v_p and the state of remainder component 0 z_p from X (no feed-through).
+    remainder_velocity, remainder_state : (n_r, n) arrays
+        Per remainder input k, the rows of the velocity and of the state it reads (pad
+        ``k % n_pads``, state :meth:`~servotune.friction.law.FrictionLaw.remainder_states` of
+        component ``k // n_pads``).
+    spring_rows : (k, n) array
+        ``sum k_j z_j^2 = |spring_rows X|^2`` over the law's elastic states at all pads
+        (:meth:`~servotune.friction.law.FrictionLaw.spring_states`), for the stored energy.
     force_rows : (n_pads, n) arrays, force_du, force_dr
         F_p = force_rows X + force_du u + force_dr r (friction force, per pad; force_dr has a
         column per remainder input).
@@ -76,6 +84,9 @@ class AxisSystem:
     nonlinear: bool
     pad_velocity: np.ndarray
     pad_state: np.ndarray
+    remainder_velocity: np.ndarray
+    remainder_state: np.ndarray
+    spring_rows: np.ndarray
     force_rows: np.ndarray
     force_du: np.ndarray
     force_dr: np.ndarray
@@ -159,10 +170,11 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     outputs = [signal_name(d) for d in wp]
     if drive is not None:
         outputs += ["slide_x", "omega_motor", "following_error", "torque", "current"]
-    for p in pads:
-        outputs += [signal_name(p), signal_name(p, "v_"), signal_name(p, "F_")]
-        if nonlinear:
-            outputs.append(signal_name(p, "z_"))
+    pad_blocks = blocks[1:1 + len(pads)]
+    for p, block in zip(pads, pad_blocks, strict=True):
+        # the pad, then the friction block's outputs but the force on the DOF (F_, states)
+        outputs += [signal_name(p), signal_name(p, "v_")] + [
+            o for o in block.output_labels if o != signal_name(p, "f_")]
     inplist = list(inputs) + remainders
     # control.interconnect needs every listed input to reach a block; 'one' and r_ exist only
     # with a nonlinear law
@@ -190,11 +202,24 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     force_rows = np.zeros((n_pad, n))
     force_du = np.zeros((n_pad, len(inputs)))
     force_dr = np.zeros((n_pad, len(remainders)))
+    def law_state(p, name):
+        return state_row(f"friction_{signal_name(p)}_{name}")
+
+    rem_v = np.zeros((len(remainders), n))
+    rem_z = np.zeros((len(remainders), n))
+    springs = []
     for k, p in enumerate(pads):
         force_rows[k], force_du[k], dr = out_row(signal_name(p, "F_"))
         if nonlinear:
-            pad_z[k] = state_row(f"friction_{signal_name(p)}_{signal_name(p, 'z_')}")
+            states = friction.remainder_states(p)
+            pad_z[k] = law_state(p, states[0])
             force_dr[k] = dr
+            for comp, name in enumerate(states):
+                rem_v[comp * n_pad + k] = pad_v[k]
+                rem_z[comp * n_pad + k] = law_state(p, name)
+            springs += [math.sqrt(stiff) * law_state(p, name)
+                        for name, stiff in friction.spring_states(p, n_pad)]
+    spring_rows = np.array(springs).reshape(len(springs), n)
     force_inputs = tuple(i for i, s in enumerate(inputs) if s.startswith("f_wp_"))
     wp_v = np.array([state_row(f"structure_v_{inputs[i][2:]}") for i in force_inputs]).reshape(
         len(force_inputs), n)
@@ -213,7 +238,8 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
                              _factor_psd(structure.stiffness) @ sel_x])
     return AxisSystem(
         system=sys, inputs=tuple(inputs), outputs=tuple(outputs), pads=pads, nonlinear=nonlinear,
-        pad_velocity=pad_v, pad_state=pad_z, force_rows=force_rows, force_du=force_du,
+        pad_velocity=pad_v, pad_state=pad_z, remainder_velocity=rem_v,
+        remainder_state=rem_z, spring_rows=spring_rows, force_rows=force_rows, force_du=force_du,
         force_dr=force_dr, wp_velocity=wp_v, wp_force_inputs=force_inputs,
         motor_rows=motor_rows, damping_rows=damping_rows, energy_rows=energy_rows,
         structure=structure)

@@ -1,0 +1,215 @@
+"""The kinds of linear guide-way contact, registered, and how each is built from a friction law.
+
+A contact kind (:class:`ContactKind`) names a linear model of the guide-way friction for the plant
+(:class:`servotune.plant.Contact`), the parameters it takes and how it is built from the axis'
+friction (:class:`servotune.plant.GuideWayFriction`, whose law is any registered
+:class:`servotune.friction.law.FrictionLaw`). The plant, the frequency responses, the analyses and
+the command line (``--contact``) take the kinds from here (:func:`contact_kinds`); a new kind is
+one :func:`register_contact_kind`. This module imports nothing numerical, so that the command
+line can list the kinds without loading numpy.
+
+References
+----------
+G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
+sec 3, 4.1, 4.2 (the contact models), Eq 8-10 (describing function).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from .units import RAD_S_PER_HZ
+
+__all__ = ["CONTACT_PARAMETERS", "ContactKind", "ContactParameter", "contact_kind",
+           "contact_kinds", "register_contact_kind"]
+
+
+@dataclass(frozen=True)
+class ContactParameter:
+    """A parameter a contact kind can take (as :func:`servotune.analysis.axis_contact` and the
+    command line name it).
+
+    Parameters
+    ----------
+    name : str
+        Keyword of :func:`servotune.analysis.axis_contact` and of :meth:`ContactKind.build`.
+    flag : str
+        Command-line option.
+    unit : str
+        SI unit, for messages.
+    what : str
+        What it sets, for messages ("the sliding speed").
+    nonzero : bool
+        Whether 0 counts as not given.
+    """
+
+    name: str
+    flag: str
+    unit: str
+    what: str
+    nonzero: bool = False
+
+
+#: The parameters of the contact kinds, by name.
+CONTACT_PARAMETERS = MappingProxyType({p.name: p for p in (
+    ContactParameter("c", "--c", "N s/m", "the viscous damping"),
+    ContactParameter("amplitude", "--amplitude", "m", "the vibration"),
+    ContactParameter("frequency_hz", "--frequency-hz", "Hz", "the vibration"),
+    ContactParameter("speed", "--speed", "m/s", "the sliding speed", nonzero=True),
+)})
+
+
+@dataclass(frozen=True)
+class ContactKind:
+    """A kind of linear guide-way contact: how it is built from the axis' friction law.
+
+    Parameters
+    ----------
+    name : str
+        The kind (``Contact.kind``, ``--contact``).
+    summary : str
+        One line for help texts.
+    build : callable
+        ``build(friction, **parameters) -> Contact`` with ``friction`` a
+        :class:`GuideWayFriction` (None for kinds that need no friction) and the parameters of
+        :data:`CONTACT_PARAMETERS` it uses (the others None).
+    required, optional : tuple of str
+        The parameters it needs and those it may take.
+    purpose : str
+        What the required parameters describe (for messages).
+    example : str
+        The command-line options of an example (for messages).
+    pads : {"contact", "locked", "free"}
+        Whether the contact acts at the pads, holds them rigidly, or is absent.
+    needs_friction : bool
+        Whether it is built from the axis' friction law.
+
+    See Also
+    --------
+    register_contact_kind, contact_kind, contact_kinds
+    """
+
+    name: str
+    summary: str
+    build: Callable = field(compare=False)
+    required: tuple[str, ...] = ()
+    optional: tuple[str, ...] = ()
+    purpose: str = ""
+    example: str = ""
+    pads: str = "contact"
+    needs_friction: bool = True
+
+    def __post_init__(self) -> None:
+        unknown = [p for p in (*self.required, *self.optional) if p not in CONTACT_PARAMETERS]
+        if unknown:
+            raise ValueError(f"ContactKind {self.name!r}: unknown parameters {unknown}; the "
+                             f"contact parameters are {list(CONTACT_PARAMETERS)}")
+        if self.pads not in ("contact", "locked", "free"):
+            raise ValueError(f"ContactKind {self.name!r}: pads must be 'contact', 'locked' or "
+                             f"'free', got {self.pads!r}")
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The parameters it uses, required first."""
+        return (*self.required, *self.optional)
+
+    def missing(self, values) -> list[str]:
+        """The required parameters absent (or 0 where 0 is not allowed) in ``values``."""
+        return [p for p in self.required if values.get(p) is None
+                or (CONTACT_PARAMETERS[p].nonzero and not values.get(p))]
+
+
+_CONTACT_KINDS: dict[str, ContactKind] = {}
+
+
+def register_contact_kind(kind: ContactKind) -> ContactKind:
+    """Add a contact kind (its name must be new); returns it.
+
+    Raises
+    ------
+    ValueError
+        If a different kind of the same name is registered.
+    """
+    known = _CONTACT_KINDS.get(kind.name)
+    if known is not None and known != kind:
+        raise ValueError(f"a contact kind {kind.name!r} is already registered")
+    _CONTACT_KINDS[kind.name] = kind
+    return kind
+
+
+def contact_kinds() -> tuple[str, ...]:
+    """The registered contact kinds, in registration order."""
+    return tuple(_CONTACT_KINDS)
+
+
+def contact_kind(name: str) -> ContactKind:
+    """The registered contact kind ``name``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind (the message lists the known ones).
+    """
+    try:
+        return _CONTACT_KINDS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"contact kind must be one of {contact_kinds()}, got {name!r}") from None
+
+
+def _presliding(friction, **_):
+    from .plant import Contact
+
+    k, c = friction.law.presliding()
+    return Contact("stiction", stiffness=k, damping=c,
+                   note=f"stiction ({friction.law.name} presliding): {k:.3g} N/m, {c:.3g} N s/m")
+
+
+def _describing(friction, amplitude, frequency_hz, **_):
+    from .plant import Contact
+
+    ceq, keq = friction.law.describing_function(amplitude, RAD_S_PER_HZ * frequency_hz)
+    return Contact.equivalent(float(ceq), max(float(keq), 0.0), amplitude)
+
+
+def _locked(friction, **_):
+    from .plant import Contact
+
+    return Contact.locked()
+
+
+def _free(friction, **_):
+    from .plant import Contact
+
+    return Contact.free()
+
+
+def _viscous(friction, c=None, **_):
+    from .plant import Contact
+
+    return Contact.viscous(friction.viscous if c is None else c)
+
+
+def _sliding(friction, speed, **_):
+    from .plant import Contact
+
+    return Contact.sliding(friction.law.sliding_system(speed), speed)
+
+
+for _kind in (
+    ContactKind("locked", "locked pads", _locked, pads="locked"),
+    ContactKind("stiction", "the friction law's presliding spring and damper", _presliding),
+    ContactKind("viscous", "the axis' viscous-only damping, or --c",
+                _viscous, optional=("c",)),
+    ContactKind("equivalent", "the friction law's describing function at --amplitude and "
+                "--frequency-hz", _describing, required=("amplitude", "frequency_hz"),
+                purpose="the vibration amplitude [m] and frequency [Hz] of the describing "
+                        "function", example="--amplitude 2e-6 --frequency-hz 50"),
+    ContactKind("sliding", "the friction law linearised at --speed",
+                _sliding, required=("speed",),
+                purpose="the sliding speed [m/s] of the linearisation",
+                example="--speed 0.03"),
+    ContactKind("free", "no friction", _free, pads="free", needs_friction=False),
+):
+    register_contact_kind(_kind)

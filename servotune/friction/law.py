@@ -1,0 +1,301 @@
+"""The interface of a guide-way friction law, and the registry the laws join by subclassing it.
+
+A friction law is one class on :class:`FrictionLaw` in a module of the package
+:mod:`servotune.friction.laws`. Defining the class registers it under its :attr:`~FrictionLaw.name`
+(``__init_subclass__``); the package imports every module it holds (``pkgutil``), so a new law
+is one new module and nothing else: the axis description (``[friction.<name>]``), the linear
+contacts of the plant (:mod:`servotune.plant`), the command line and the time simulation
+(:mod:`servotune.simulate`, whose compiled kernel is built for the law's remainder) find it
+through :func:`friction_law` and :func:`friction_law_names`.
+
+What a law gives (values are axis totals, shared equally by the guide-way pads):
+
+* **linear contacts for the plant**: :meth:`~FrictionLaw.presliding` (the contact at rest,
+  spring and damper), :meth:`~FrictionLaw.sliding_system` (linearised about steady sliding at a
+  speed) and :meth:`~FrictionLaw.describing_function` (Ceq, Keq at a vibration; by default the
+  first harmonic of :meth:`~FrictionLaw.periodic_force`);
+* **the time simulation**: a linear block per pad (:meth:`~FrictionLaw.pad_block`) and, for a
+  nonlinear law, a numba-compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``
+  (:meth:`~FrictionLaw.remainder`) with its parameters, the states each remainder reads, the
+  stored elastic energy and the scales of the integrator's error control;
+* **harmonic balance**: :meth:`~FrictionLaw.periodic_force`, the force of one pad on the law's
+  periodic orbit under a periodic pad velocity;
+* **the axis file**: :meth:`~FrictionLaw.from_table` reads ``[friction.<name>]``.
+
+References
+----------
+G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21 (2014),
+sec 3 (friction lumped at the guide-way pads), Eq 3, Eq 8-10.
+A. Gelb, W. E. Vander Velde, Multiple-Input Describing Functions and Nonlinear System Design,
+McGraw-Hill (1968), ch 2 (the describing function as the first harmonic of the periodic
+response), Eq 2.3-7.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import pkgutil
+import sys
+
+import control
+import numpy as np
+
+from ..structure.model import signal_name
+
+__all__ = ["FrictionLaw", "friction_law", "friction_law_names", "friction_laws",
+           "LAWS_PACKAGE"]
+
+#: The package whose modules are imported to discover the friction laws.
+LAWS_PACKAGE = "servotune.friction.laws"
+
+_REGISTRY: dict[str, type] = {}
+
+
+class FrictionLaw:
+    """Base class of a guide-way friction law (registered by defining a subclass).
+
+    A subclass sets the class attribute :attr:`name` (lower case, the key of
+    ``[friction.<name>]`` in an axis description) and implements at least
+    :meth:`pad_block`, :meth:`presliding`, :meth:`friction_force` and, for a nonlinear law
+    (``nonlinear = True``), :meth:`remainder`, :meth:`remainder_parameters`,
+    :meth:`remainder_states`, :meth:`spring_states`, :meth:`error_scales`,
+    :meth:`newton_tolerance` and :meth:`periodic_force`. A class with ``name = None`` (an
+    intermediate base) is not registered.
+
+    Signals of :meth:`pad_block`: inputs the pad velocity ``v_<pad>``, the remainders
+    (:meth:`remainder_signals`) and the constant ``one``; outputs the force on the pad DOF
+    ``f_<pad>`` (minus the friction force), the friction force ``F_<pad>`` and, for a nonlinear
+    law, its states (recorded by the simulation).
+
+    See Also
+    --------
+    friction_law, friction_law_names
+    servotune.simulate.simulate : integrates the law at every pad
+    servotune.plant.Contact : the linear contacts built from :meth:`presliding`,
+        :meth:`sliding_system` and :meth:`describing_function`
+    """
+
+    #: Registry key (``[friction.<name>]``); None for an abstract base.
+    name: str | None = None
+    #: Whether the law has a nonlinear remainder for the time simulation.
+    nonlinear: bool = False
+    #: Prefixes of the remainder inputs of one pad, one per remainder component.
+    remainder_prefixes: tuple[str, ...] = ("r_",)
+    #: How to fix a bad ``[friction.<name>]`` (shown with the error).
+    table_hint: str = "give the law's parameters in SI units (see its documentation)"
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        name = cls.__dict__.get("name")
+        if name is None:
+            return
+        if not (isinstance(name, str) and name.isidentifier() and name == name.lower()):
+            raise TypeError(f"{cls.__qualname__}.name must be a lower-case identifier (the key "
+                            f"of [friction.<name>] in an axis file), got {name!r}")
+        known = _REGISTRY.get(name)
+        if known is not None and (known.__module__, known.__qualname__) != (
+                cls.__module__, cls.__qualname__):
+            raise TypeError(f"two friction laws are named {name!r}: "
+                            f"{known.__module__}.{known.__qualname__} and "
+                            f"{cls.__module__}.{cls.__qualname__}; rename one")
+        _REGISTRY[name] = cls
+
+    # ---------------------------------------------------------------- the axis file
+
+    @classmethod
+    def from_table(cls, value) -> FrictionLaw:
+        """The law from its entry ``[friction.<name>]`` of an axis description.
+
+        Parameters
+        ----------
+        value : dict or str
+            The table of parameters (SI) or the name of a published set.
+
+        Raises
+        ------
+        ValueError
+            A parameter is missing, unknown or out of range (the message names it).
+        """
+        raise ValueError(f"the {cls.name!r} friction law cannot be read from an axis file")
+
+    # ---------------------------------------------------------------- linear contacts
+
+    @property
+    def viscous_part(self) -> float:
+        """The viscous part of the law [N s/m] (axis total): the damping of the paper's
+        viscous-only model unless the axis gives one."""
+        return 0.0
+
+    def presliding(self) -> tuple[float, float]:
+        """The contact linearised at rest: (stiffness [N/m], damping [N s/m]), axis totals."""
+        raise NotImplementedError
+
+    def sliding_system(self, speed: float) -> control.StateSpace:
+        """The contact linearised about steady sliding at ``speed`` [m/s] (non-zero): a SISO
+        system from the velocity deviation [m/s] to the force deviation [N], axis total.
+
+        Raises
+        ------
+        ValueError
+            If the law has no sliding linearisation or ``speed`` is 0.
+        """
+        raise ValueError(f"the {self.name!r} friction law has no sliding linearisation")
+
+    def describing_function(self, amplitude: float, omega: float,
+                            n_samples: int = 512) -> tuple[float, float]:
+        """Equivalent damping Ceq [N s/m] and stiffness Keq [N/m] (axis totals) under
+        ``x = A sin(omega t)``: the first harmonic of the periodic force.
+
+        Parameters
+        ----------
+        amplitude : float
+            Displacement amplitude A [m], > 0.
+        omega : float
+            Angular frequency [rad/s], > 0.
+        n_samples : int
+            Samples of the period given to :meth:`periodic_force`.
+
+        Returns
+        -------
+        (ceq, keq) : tuple of float
+            ``F_1 = (Keq + j omega Ceq) X_1`` for the first harmonics F_1, X_1 of force and
+            displacement (Gelb and Vander Velde 1968, Eq 2.3-7).
+
+        Raises
+        ------
+        ValueError
+            If amplitude or omega is not positive, or the law has no periodic force.
+        """
+        amplitude, omega = float(amplitude), float(omega)
+        if not (amplitude > 0 and omega > 0 and math.isfinite(amplitude * omega)):
+            raise ValueError(f"the describing function needs amplitude > 0 m and omega > 0 "
+                             f"rad/s, got {amplitude!r} and {omega!r}")
+        theta = 2.0 * math.pi * np.arange(n_samples) / n_samples
+        force = self.periodic_force(amplitude * omega * np.cos(theta), 2.0 * math.pi / omega)
+        # x = A sin(theta) has X_1 = -j A; F_1 = (2/N) sum F e^{-j theta}
+        f1 = 2.0 / n_samples * np.sum(force * np.exp(-1j * theta))
+        ratio = f1 / (-1j * amplitude)
+        return float(ratio.imag / omega), float(ratio.real)
+
+    # ---------------------------------------------------------------- time simulation
+
+    @property
+    def n_remainders(self) -> int:
+        """Remainder inputs per pad (0 for a linear law)."""
+        return len(self.remainder_prefixes) if self.nonlinear else 0
+
+    def remainder_signals(self, pad: str) -> tuple[str, ...]:
+        """The names of the remainder inputs of one pad, one per component."""
+        return tuple(signal_name(pad, prefix) for prefix in self.remainder_prefixes[
+            :self.n_remainders])
+
+    def remainder_states(self, pad: str) -> tuple[str, ...]:
+        """The state of :meth:`pad_block` each remainder component reads (its ``z``)."""
+        raise NotImplementedError
+
+    def spring_states(self, pad: str, n_pads: int) -> tuple[tuple[str, float], ...]:
+        """(state, stiffness [N/m]) of one pad's elastic states: the stored energy is
+        ``sum k z^2 / 2``."""
+        return ()
+
+    def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
+        """The linear part for one pad of ``n_pads``, linearised about ``speed`` [m/s]."""
+        raise NotImplementedError
+
+    def remainder(self):
+        """The compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``.
+
+        A module-level numba function (``numba.njit(cache=True)``) of the law's module: the
+        simulation compiles its kernel around it
+        (:func:`servotune.simulate.integrator.chunk_kernel`).
+        """
+        raise NotImplementedError
+
+    def remainder_parameters(self, speed: float = 0.0) -> np.ndarray:
+        """The parameter vector ``p`` of :meth:`remainder` for the linearisation about
+        ``speed`` [m/s]."""
+        raise NotImplementedError
+
+    def error_scales(self) -> tuple[float, tuple[float, ...]]:
+        """(velocity scale [m/s], state scale [m] per remainder component) of the local error
+        control: errors in the pad motion are measured relative to them."""
+        raise NotImplementedError
+
+    def newton_tolerance(self, step: float) -> float:
+        """Tolerance [m/s] on the remainders in the Newton iteration for a step [s]."""
+        raise NotImplementedError
+
+    def friction_force(self, v, z):
+        """Friction force [N], axis total, for pad velocity v [m/s] and state z."""
+        raise NotImplementedError
+
+    # ---------------------------------------------------------------- harmonic balance
+
+    def periodic_force(self, velocity, period: float, share: float = 1.0) -> np.ndarray:
+        """Friction force [N] of one pad carrying ``share`` of the law, on the periodic orbit.
+
+        Parameters
+        ----------
+        velocity : array_like
+            The pad velocity [m/s] at N equally spaced instants of one period (periodic: the
+            sample after the last is the first).
+        period : float
+            The period [s], > 0.
+        share : float
+            The pad's share of the axis-total law (``1 / n_pads``), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            The force [N] at the same N instants, with the law's states on their periodic orbit.
+        """
+        raise NotImplementedError(f"the {self.name!r} friction law has no periodic force")
+
+
+def _discover() -> None:
+    """Import the laws package and any module of it not imported yet (a module added to the
+    package's folders since is found too)."""
+    package = importlib.import_module(LAWS_PACKAGE)
+    for info in pkgutil.iter_modules(package.__path__):
+        name = f"{LAWS_PACKAGE}.{info.name}"
+        if not info.name.startswith("_") and name not in sys.modules:
+            importlib.import_module(name)
+
+
+def friction_laws() -> dict[str, type]:
+    """All registered friction laws, by name (the laws package imported first).
+
+    Examples
+    --------
+    >>> {"lugre", "viscous"} <= set(friction_laws())
+    True
+    """
+    _discover()
+    return dict(_REGISTRY)
+
+
+def friction_law_names() -> tuple[str, ...]:
+    """The names of the registered friction laws, sorted."""
+    return tuple(sorted(friction_laws()))
+
+
+def friction_law(name: str) -> type:
+    """The friction law class registered under ``name``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (the message lists the known ones).
+
+    Examples
+    --------
+    >>> friction_law("lugre").__name__
+    'LuGreFriction'
+    """
+    laws = friction_laws()
+    try:
+        return laws[str(name).lower()]
+    except KeyError:
+        raise ValueError(f"unknown friction law {name!r}; the registered laws are "
+                         f"{sorted(laws)} (a law is a module in {LAWS_PACKAGE})") from None

@@ -1,0 +1,166 @@
+"""The friction-law interface and registry: discovery, the linear contacts built from any law,
+the axis file, and the compiled kernel of a law (never stale)."""
+
+import importlib
+import sys
+
+import numpy as np
+import pytest
+from axis_fixtures import PADS, small_axis, small_drive
+from numpy.testing import assert_allclose
+from scipy.integrate import solve_ivp
+
+import servotune.friction.laws as laws_package
+from servotune.friction import LuGreParameters
+from servotune.friction.law import FrictionLaw, friction_law, friction_law_names
+from servotune.plant import Contact, GuideWayFriction, contact_kinds
+from servotune.simulate import NonlinearAxis, axis_system, simulate, sine_sweep
+
+# A law in its own module: a Maxwell element (spring k in series with a damper k/c) written as a
+# "nonlinear" law whose remainder is r = c z (linear, so that the simulation has a closed-form
+# reference). CONSTANT is the relaxation rate c [1/s], hard-coded in the compiled remainder.
+TOY = '''
+from dataclasses import dataclass
+
+import control
+import numba
+
+from servotune.friction.law import FrictionLaw
+from servotune.structure.model import signal_name
+
+
+@numba.njit(cache=True)
+def toy_remainder(component, v, z, p):
+    return CONSTANT * z, 0.0, CONSTANT
+
+
+@dataclass(frozen=True)
+class ToyMaxwell(FrictionLaw):
+    k: float
+    name = "toymaxwell"
+    nonlinear = True
+
+    @classmethod
+    def from_table(cls, value):
+        return cls(float(value["k"]))
+
+    def presliding(self):
+        return self.k, 0.0
+
+    def pad_block(self, pad, n_pads, speed=0.0):
+        v, r, f, force, z = (signal_name(pad, s) for s in ("v_", "r_", "f_", "F_", "z_"))
+        k = self.k / n_pads
+        return control.ss([[0.0]], [[1.0, -1.0, 0.0]], [[-k], [k], [1.0]], [[0.0] * 3] * 3,
+                          inputs=[v, r, "one"], outputs=[f, force, z], states=[z],
+                          name=f"friction_{signal_name(pad)}")
+
+    def remainder(self):
+        return toy_remainder
+
+    def remainder_parameters(self, speed=0.0):
+        return [0.0]
+
+    def remainder_states(self, pad):
+        return (signal_name(pad, "z_"),)
+
+    def spring_states(self, pad, n_pads):
+        return ((signal_name(pad, "z_"), self.k / n_pads),)
+
+    def error_scales(self):
+        return 1e-3, (1e-6,)
+
+    def newton_tolerance(self, step):
+        return 1e-14
+'''
+
+
+@pytest.fixture
+def toy_law(tmp_path, monkeypatch):
+    """A law module added to the laws package (a folder of its own on the package's path)."""
+    folder = tmp_path / "laws"
+    folder.mkdir()
+    monkeypatch.setattr(laws_package, "__path__", [*laws_package.__path__, str(folder)])
+    monkeypatch.setenv("SERVOTUNE_KERNEL_DIR", str(tmp_path / "kernels"))
+    module = f"{laws_package.__name__}.toymaxwell"
+
+    def write(constant):
+        (folder / "toymaxwell.py").write_text(TOY.replace("CONSTANT", repr(constant)))
+        importlib.invalidate_caches()
+        if module in sys.modules:
+            return importlib.reload(sys.modules[module])
+        return None
+
+    write(50.0)
+    yield write
+    sys.modules.pop(module, None)
+    from servotune.friction import law as law_module
+    law_module._REGISTRY.pop("toymaxwell", None)
+
+
+def test_the_bundled_laws_are_discovered():
+    assert {"lugre", "viscous"} <= set(friction_law_names())
+    assert issubclass(friction_law("LuGre"), FrictionLaw)
+    with pytest.raises(ValueError, match=r"unknown friction law 'glue'.*lugre"):
+        friction_law("glue")
+
+
+def test_two_laws_of_one_name_are_refused():
+    with pytest.raises(TypeError, match="two friction laws are named 'lugre'"):
+        type("Impostor", (FrictionLaw,), {"name": "lugre"})
+
+
+def test_a_new_module_is_a_new_law_for_the_contacts_and_the_axis_file(toy_law, tmp_path):
+    # nothing but the module: the registry, the contacts and the loader find it
+    toy = friction_law("toymaxwell")
+    law = toy.from_table({"k": 2.0e8})
+    friction = GuideWayFriction(PADS, law=law, viscous=10.0)
+    assert friction.lugre is None
+    stiction = friction.contact("stiction")
+    assert (stiction.stiffness, stiction.damping) == (2.0e8, 0.0)
+    assert friction.contact("viscous").damping == 10.0
+    with pytest.raises(ValueError, match="no sliding linearisation"):
+        friction.contact("sliding", v0=0.01)
+    assert set(contact_kinds()) >= {"locked", "stiction", "viscous", "equivalent", "sliding",
+                                    "free"}
+
+
+def test_the_lugre_contacts_are_the_lugre_linearisations():
+    p = LuGreParameters.named("bianchi2014")
+    friction = GuideWayFriction(PADS, p)
+    assert friction.law.name == "lugre"
+    assert friction.contact("stiction") == Contact("stiction", stiffness=p.sigma0,
+                                                   damping=p.sigma1 + p.sigma2,
+                                                   note=friction.contact("stiction").note)
+    with pytest.raises(ValueError, match="not both"):
+        GuideWayFriction(PADS, LuGreParameters.named("canudas1995"), law=friction.law)
+
+
+def _maxwell_reference(law, rate, scenario):
+    """The axis with the toy law as a linear system (r = rate z folded into A), by LSODA."""
+    sysm = axis_system(small_axis(), small_drive(), law, PADS, 0.0, inputs=["f_wp_x", "one"])
+    a = sysm.system.A + sysm.system.B[:, 2:] @ (rate * sysm.remainder_state)
+    b = sysm.system.B[:, 0]
+    force = scenario.forces["wp.x"]
+    sol = solve_ivp(lambda t, x: a @ x + b * float(force(t)), (0.0, scenario.duration),
+                    np.zeros(a.shape[0]), method="LSODA", rtol=1e-10, atol=1e-16,
+                    t_eval=np.linspace(0.0, scenario.duration, 41))
+    return sysm.system.C[sysm.outputs.index("wp_x")] @ sol.y
+
+
+def test_the_kernel_follows_a_changed_law_never_stale(toy_law):
+    # the compiled remainder is a constant of the kernel: after the law's source changes, the
+    # simulation must use the new one (a kernel compiled and cached for the old source would
+    # silently give the old result)
+    scenario = sine_sweep(50.0, 30.0, 30.0, 0.04)
+    results = {}
+    for rate in (50.0, 5000.0):
+        if rate != 50.0:
+            toy_law(rate)
+        law = friction_law("toymaxwell")(2.0e8)
+        axis = NonlinearAxis(small_axis(), small_drive(), PADS, law)
+        run = simulate(axis, scenario, record_step=1e-3)
+        results[rate] = run.signals["wp_x"]
+        reference = _maxwell_reference(law, rate, scenario)
+        assert_allclose(run.signals["wp_x"], reference, atol=1e-4 * np.abs(reference).max())
+    # the two laws differ visibly, so the check above could tell them apart
+    assert np.abs(results[50.0] - results[5000.0]).max() > 0.05 * np.abs(results[50.0]).max()
