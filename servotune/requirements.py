@@ -43,27 +43,37 @@ class Requirements:
     Parameters
     ----------
     ms_velocity_max, ms_position_max : float
-        Largest allowed sensitivity peak of the velocity and the position loop (> 1).
+        Largest allowed sensitivity peak of the velocity and the position loop (finite, > 1).
     phase_margin_min_deg, gain_margin_min_db : float, optional
-        Smallest allowed margins; enforced through the Ms disk (each tightens the Ms limit).
+        Smallest allowed phase margin [deg], in (0, 90), and gain margin [dB], > 0; enforced
+        through the Ms disk (each can only tighten the Ms limit, see `ms_limit`).
     kv_min : float
-        Smallest allowed position gain Kv [1/s].
-    depth_required : float, optional
-        Required axial depth of cut [m] (for the chatter margin).
-    thrust_margin : float
-        Fraction of the motor's thrust kept in reserve (0.2: the needs may use 80 %).
-    bandwidth_ratio_min : float
-        Velocity-loop over position-loop closed-loop bandwidth, at least (0: not required).
-    current_bandwidth_ratio_min : float
-        Current-loop over velocity-loop closed-loop bandwidth, at least (0: not required).
-    ti_bandwidth_min, ti_bandwidth_max : float
-        Range of Ti times the velocity loop's closed-loop bandwidth [rad/s x s] (0: no bound).
-    nonlinear_tolerance : float
-        How far above the design's claim the nonlinear axis may peak (0.3: 30 %).
+        Smallest allowed position gain Kv [1/s], >= 0.
     band : (float, float)
-        Frequency band [rad/s] of the compliance-peak objective.
+        Frequency band (low, high) [rad/s] of the compliance-peak objective, 0 < low < high.
     loop_band : (float, float)
-        Frequency range [rad/s] on which the loop constraints are imposed.
+        Frequency range (low, high) [rad/s] on which the loop constraints are imposed.
+    depth_required : float, optional
+        Required axial depth of cut [m], > 0 (for the chatter margin).
+    thrust_margin : float
+        Fraction of the motor's thrust kept in reserve, in [0, 1) (0.2: the needs may use
+        80 %).
+    bandwidth_ratio_min : float
+        Velocity-loop over position-loop closed-loop bandwidth, at least (0: not required,
+        else >= 1).
+    current_bandwidth_ratio_min : float
+        Current-loop over velocity-loop closed-loop bandwidth, at least (0: not required, else
+        >= 1).
+    ti_bandwidth_min, ti_bandwidth_max : float
+        Range of Ti times the velocity loop's closed-loop bandwidth [s x rad/s] (0: no bound;
+        a nonzero maximum must exceed the minimum).
+    nonlinear_tolerance : float
+        How far above the design's claim the nonlinear axis may peak, >= 0 (0.3: 30 %).
+
+    Raises
+    ------
+    ValueError
+        When a field lies outside the range given above, or is not finite.
     """
 
     ms_velocity_max: float = 2.0
@@ -118,7 +128,32 @@ class Requirements:
             object.__setattr__(self, name, (lo, hi))
 
     def ms_limit(self, loop: str) -> float:
-        """The Ms limit of a loop including what the margin requirements imply."""
+        """Return the Ms limit of a loop, tightened by the margin requirements.
+
+        A Nyquist curve outside the disk of radius 1/Ms about -1 has a phase margin of at least
+        ``2 asin(1/(2 Ms))`` and a gain margin of at least ``Ms/(Ms - 1)``; inverted, a phase
+        margin PM asks ``Ms <= 1/(2 sin(PM/2))`` and a gain margin GM (as a ratio)
+        ``Ms <= GM/(GM - 1)`` (Astrom and Murray, Feedback Systems, 2nd ed., sec 13.3).
+
+        Parameters
+        ----------
+        loop : str
+            ``"velocity"`` for the velocity loop; any other value gives the position loop's
+            limit.
+
+        Returns
+        -------
+        float
+            The smallest of the loop's own Ms limit (`ms_velocity_max` or `ms_position_max`)
+            and those the margin requirements imply.
+
+        Examples
+        --------
+        A 45 deg phase margin asks Ms <= 1/(2 sin 22.5 deg) = 1.307:
+
+        >>> round(Requirements(phase_margin_min_deg=45.0).ms_limit("velocity"), 3)
+        1.307
+        """
         limit = self.ms_velocity_max if loop == "velocity" else self.ms_position_max
         if self.phase_margin_min_deg is not None:
             limit = min(limit, 1.0 / (2.0 * math.sin(math.radians(self.phase_margin_min_deg) / 2)))
