@@ -55,9 +55,33 @@ DEFAULT_BOUNDS = {"c": (1e3, 1e8), "kv": (1.0, 300.0), "kp_factor": (0.01, 100.0
 
 def process_amplitude(axis: Axis, drive, c: float, force_pp: float,
                       friction=None) -> tuple[float, float]:
-    """Pad vibration amplitude [m] and angular frequency [rad/s] at the standing regime's
-    compliance peak under a work-piece force of ``force_pp`` peak to peak, from the LuGre
-    presliding model (the amplitude of the describing-function model of the standing regime).
+    """Return the pad vibration amplitude and frequency at the standing regime's compliance peak.
+
+    The work-piece compliance ``wp.x`` is evaluated with the pads on the LuGre presliding
+    contact (spring sigma0, damper sigma1 + C) at 3000 log-spaced frequencies over
+    ``axis.requirements.band``; at its peak, the pad amplitude is the mean magnitude of the
+    pads' receptances to the work-piece force times half the peak-to-peak force. This is the
+    amplitude of the describing-function model of the standing regime.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis (structure, pads, requirements; its friction unless ``friction`` is given).
+    drive : Drive or None
+        The drive closing the loop; None for the structure without a motor.
+    c : float
+        Viscous guide-way damping C [N s/m] added to sigma1 in the presliding contact.
+    force_pp : float
+        Peak-to-peak work-piece force [N].
+    friction : LuGreParameters, optional
+        LuGre parameters of the pads; default ``axis.friction.lugre``.
+
+    Returns
+    -------
+    amplitude : float
+        Pad vibration amplitude [m] (half the peak to peak), at least 1e-12.
+    frequency : float
+        Angular frequency [rad/s] of the compliance peak.
     """
     p = axis.friction.lugre if friction is None else friction
     omega = 2 * math.pi * np.geomspace(*(np.array(axis.requirements.band) / (2 * math.pi)),
@@ -71,11 +95,31 @@ def process_amplitude(axis: Axis, drive, c: float, force_pp: float,
 
 
 def axis_regimes(axis: Axis, c: float | None = None, drive=None) -> tuple[RegimeModel, ...]:
-    """The regime models of an axis (:func:`servotune.regimes.regime_models`): viscous pads
-    alone without a drive (the paper's sec 4.1), else standing (presliding, and the describing
-    function at the process amplitude) and feeding at each feed speed, for the nominal friction
-    and the corners of ``[tuning] friction_spread``; plus a rapid-traverse model for the loops
-    when the axis is judged standing only."""
+    """Return the regime models of an axis (:func:`servotune.regimes.regime_models`).
+
+    Without ``[drive]``, ``[friction]`` or ``[operation]``: the viscous pads alone (the paper's
+    sec 4.1). Else standing (presliding, and the describing function at the process amplitude
+    of :func:`process_amplitude` under ``[operation] process_force_pp``, 600 N when unset) and
+    feeding at each feed speed, for the nominal friction, the corners of
+    ``[tuning] friction_spread`` and the extra ``[tuning]`` friction samples; plus a
+    rapid-traverse model (sliding at ``[operation] rapid_speed``, 0.1 m/s when unset, not
+    cutting) for the loops when the axis has no feed speeds.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+    c : float, optional
+        Viscous guide-way damping C [N s/m] at which the process amplitude is computed;
+        default the axis' ``[friction] viscous``.
+    drive : Drive, optional
+        Not used: the process amplitude is computed on the structure without a motor.
+
+    Returns
+    -------
+    tuple of RegimeModel
+        The models, the nominal friction first.
+    """
     if axis.drive is None or axis.friction is None or axis.operation is None:
         return regime_models(None, None)
     op = axis.operation
@@ -97,10 +141,17 @@ def axis_regimes(axis: Axis, c: float | None = None, drive=None) -> tuple[Regime
 def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
                    bounds: dict | None = None, c0: float | None = None,
                    regimes=None) -> TuningProblem:
-    """The tuning problem of an axis.
+    """Return the tuning problem of an axis.
+
+    The axis' requirements are kept, except the objective band of a two-mass axis without a
+    drive (layout B), which starts at the first fixed point and reaches at least 4 times the
+    second (the closed-form optimum's band). With a drive, and unless ``bounds`` gives ``c``,
+    the lower bound of C is raised to the guide ways' own viscous friction sigma2.
 
     Parameters
     ----------
+    axis : Axis
+        The axis description (needs ``[friction]``).
     free : sequence of str
         Free variables among c, kv, kp, ti (those needing a drive are dropped when the axis has
         none).
@@ -113,7 +164,22 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
         Initial C [N s/m]; default the axis' viscous guide-way damping, moved into the bounds
         when outside them.
     regimes : sequence of RegimeModel, optional
-        Default :func:`axis_regimes`.
+        Default :func:`axis_regimes` at ``c0``.
+
+    Returns
+    -------
+    TuningProblem
+        Structure, pads, initial C, drive, free variables, bounds (``kp`` as
+        ``kp_factor`` times the drive's velocity-loop Kp unless ``bounds`` gives ``kp``),
+        requirements, chatter target (with ``[cutting]``), weights
+        ``(1 - chatter_weight, chatter_weight)``, regime models and thrust budget.
+
+    Raises
+    ------
+    ValueError
+        If ``chatter_weight`` lies outside [0, 1].
+    AxisFormatError
+        If the axis has no ``[friction]``, or ``chatter_weight > 0`` without ``[cutting]``.
     """
     if not 0.0 <= chatter_weight <= 1.0:
         raise ValueError(f"chatter_weight must lie in [0, 1], got {chatter_weight!r}")
@@ -176,7 +242,21 @@ def _two_mass_system(axis: Axis) -> twomass.TwoMassSystem | None:
 
 @dataclass(frozen=True)
 class TwoMassCheck:
-    """The tuned C of a two-mass axis against the closed forms of sec 4.1 (Eq 4, 7)."""
+    """The tuned C of a two-mass axis against the closed forms of sec 4.1 (Eq 4, 7).
+
+    Parameters
+    ----------
+    system : servotune.twomass.TwoMassSystem
+        The two-mass system (M1, K, alpha).
+    c_opt_analytic : float
+        Closed-form optimal damping Copt [N s/m] (paper, Eq 4).
+    c_opt_tuned : float
+        C [N s/m] the tuning found.
+    peak_analytic : float
+        Peak compliance with Copt [m/N] (paper, Eq 7).
+    peak_tuned : float
+        Peak compliance of the tuned design [m/N].
+    """
 
     system: twomass.TwoMassSystem
     c_opt_analytic: float
@@ -193,6 +273,14 @@ class TwoMassCheck:
         return self.peak_tuned / self.peak_analytic - 1.0
 
     def to_dict(self) -> dict:
+        """Return the check as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``m1`` [kg], ``k`` [N/m], ``alpha``, both C [N s/m] and peaks [m/N] and their
+            relative differences (tuned / analytic - 1).
+        """
         return {"m1": self.system.m1, "k": self.system.k, "alpha": self.system.alpha,
                 "c_opt_analytic": self.c_opt_analytic, "c_opt_tuned": self.c_opt_tuned,
                 "c_relative_difference": self.c_relative_difference,
@@ -202,7 +290,21 @@ class TwoMassCheck:
 
 
 def two_mass_check(axis: Axis, result: TuningResult | None) -> TwoMassCheck | None:
-    """Compare a tuned C with Copt and g(alpha)/K when the axis is a two-mass layout B."""
+    """Compare a tuned C with Copt and g(alpha)/K when the axis is a two-mass layout B.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+    result : TuningResult or None
+        The tuning result.
+
+    Returns
+    -------
+    TwoMassCheck or None
+        None when the axis is no two-mass layout B (two DOFs, one pad, ``wp.x``, a single
+        spring between them and no mass coupling), or when there is no verified design.
+    """
     system = _two_mass_system(axis)
     if system is None or result is None or result.after is None:
         return None
@@ -221,7 +323,8 @@ class ModePeaks:
     frequencies : numpy.ndarray
         (modes, len(c)) natural frequency [rad/s] of each tracked closed-loop mode.
     peaks : numpy.ndarray
-        (modes, len(c)) peak of the mode's own term of the compliance, |R|/|Re lambda| [m/N].
+        (modes, len(c)) peak of the mode's own term of the compliance, 2 |R|/|Re lambda|
+        [m/N]; NaN where the mode's track has ended.
     c_best : numpy.ndarray
         The C [N s/m] that minimises each mode's peak on the grid.
     c_chosen : float
@@ -235,6 +338,14 @@ class ModePeaks:
     c_chosen: float
 
     def to_dict(self) -> dict:
+        """Return the peaks at the design's C and at each mode's best C as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``c_chosen`` [N s/m] and ``modes``: per mode, its frequency [Hz] and peak [m/N] at
+            the grid point nearest ``c_chosen`` (in log C), its best C and the peak there.
+        """
         i = int(np.argmin(np.abs(np.log(self.c_values / self.c_chosen))))
         return {"c_chosen": self.c_chosen, "modes": [
             {"frequency_at_chosen_c_hz": float(self.frequencies[m, i] * HZ_PER_RAD_S),
@@ -244,6 +355,13 @@ class ModePeaks:
             for m in range(self.peaks.shape[0])]}
 
     def plot(self):
+        """Plot each mode's peak against C (:func:`servotune.plots.plot_mode_peaks`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+        """
         from .plots import plot_mode_peaks
 
         return plot_mode_peaks(self)
@@ -260,6 +378,33 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
     largest peaks below ``f_max_hz`` that reach ``significance`` times the largest) and
     followed outwards in C by the nearest pole; a mode that turns over-damped or jumps by more
     than half its frequency ends its track (NaN). The design's C is added to the grid.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+    c_values : array_like
+        Grid of C [N s/m], > 0.
+    drive : Drive, optional
+        The drive; default the axis' (the loop is open when neither exists).
+    c_chosen : float, optional
+        The design's C [N s/m]; default the axis' ``[friction] viscous``.
+    f_max_hz : float
+        Highest natural frequency [Hz] of a tracked mode.
+    keep : int
+        Largest number of tracked modes.
+    significance : float
+        Smallest peak, as a fraction of the largest at ``c_chosen``, of a tracked mode.
+
+    Returns
+    -------
+    ModePeaks
+        The tracks on the sorted grid (``c_values`` with ``c_chosen`` added).
+
+    Raises
+    ------
+    ValueError
+        If the closed loop has no oscillating mode below ``f_max_hz`` at ``c_chosen``.
     """
     chosen = float(c_chosen if c_chosen is not None else axis.friction.viscous)
     c_values = np.unique(np.append(np.asarray(c_values, dtype=float), chosen))
@@ -300,9 +445,13 @@ class AxisTuning:
     """Everything the design job produces for an axis (see :func:`tune_axis`).
 
     ``verdict`` is the nonlinear verdict (None when the simulation was skipped: then the design
-    is not verified, only linearly checked); ``thrust_before``/``thrust_after`` the thrust
-    budget of both designs (None without torque limits); ``c_realisation`` the hardware options
-    for the tuned C; ``compliance_before``/``compliance_after`` one curve per regime model.
+    is not verified, only linearly checked; without a drive, the linear verdict of the viscous
+    pads, which are the system itself); ``thrust_before``/``thrust_after`` the thrust budget of
+    both designs (None without torque limits); ``c_realisation`` the hardware options for the
+    tuned C; ``compliance_before``/``compliance_after`` one curve per stable cutting regime
+    model of the nominal friction; ``process`` the process force, pad amplitude and frequency
+    of :func:`process_amplitude` for the tuned design; ``notes`` the defaults the axis loader
+    filled in.
     """
 
     axis: Axis
@@ -343,7 +492,15 @@ class AxisTuning:
         return "not verified"
 
     def to_dict(self) -> dict:
-        """The results file: SI values, the usual engineering units under suffixed keys."""
+        """Return the results file: SI values, the usual engineering units under suffixed keys.
+
+        Returns
+        -------
+        dict
+            JSON-ready data: status and reasons, the designs before and after, peaks,
+            margins, loops, regimes, checks, thrust, the options realising C, the verdict,
+            solver statistics and the two-mass and mode-peak checks (None where absent).
+        """
         r = self.result
         before, after = r.before, r.after
         d = r.design
@@ -437,8 +594,23 @@ def _linear_regimes(result) -> list[dict]:
 
 
 def fig5_check(starts: int = 2) -> TwoMassCheck:
-    """Tune C alone on the paper's Fig 5 system (M1 = 5000 kg, K = 16e6 N/m, alpha = 0.3) and
-    compare with the closed-form fixed-point optimum: the optimiser's check on sec 4.1."""
+    """Tune C alone on the paper's Fig 5 system and compare with the closed-form optimum.
+
+    The system is the two-mass layout B of Fig 5 (M1 = 5000 kg, K = 16e6 N/m, alpha = 0.3),
+    undamped structure, no drive; C is tuned within [1e3, 1e8] N s/m, from 1e5 N s/m, on the
+    band from the first fixed point to 4 times the second, with tolerance 1e-10: the
+    optimiser's check on sec 4.1 (Eq 4 and 7).
+
+    Parameters
+    ----------
+    starts : int
+        Number of starting points of the tuning.
+
+    Returns
+    -------
+    TwoMassCheck
+        The tuned C and peak against Copt and g(alpha)/K.
+    """
     from .requirements import Requirements
     from .structure.model import ModalModel
 
@@ -457,10 +629,38 @@ def fig5_check(starts: int = 2) -> TwoMassCheck:
 
 def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
                     duration: float = 20.0, executor=None) -> dict:
-    """Sine sweeps of the axis with LuGre pads and the design (its C as the viscous part
-    sigma2 of the friction), standing still, compared with the linear predictions (locked,
-    presliding, viscous, describing function at the simulated pad amplitude); see
-    :func:`servotune.simulate.verify.verify_design`."""
+    """Return sine sweeps of the axis with a design, compared with the linear predictions.
+
+    The axis with LuGre pads and the design (its C as the viscous part sigma2 of the
+    friction), standing still, is swept from 10 to 100 Hz and compared with the linear
+    predictions (locked, presliding, viscous, describing function at the simulated pad
+    amplitude); see :func:`servotune.simulate.verify.verify_design`.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description (needs ``[friction]`` and ``[drive]``).
+    design : Design
+        The design; its Kv, Kp and Ti left None keep the axis' values.
+    forces : sequence of float
+        Peak-to-peak work-piece forces [N], one sweep each.
+    duration : float
+        Duration of each sweep [s].
+    executor : concurrent.futures.Executor, optional
+        Runs the sweeps in parallel.
+
+    Returns
+    -------
+    dict
+        As :func:`servotune.simulate.verify.verify_design`.
+
+    Raises
+    ------
+    AxisFormatError
+        If the axis has no ``[friction]`` or no ``[drive]``.
+    ValueError
+        If a design value is not a positive number.
+    """
     from .simulate.setup import axis_setup
     from .simulate.verify import design_setup, verify_design
 
@@ -471,13 +671,39 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
 
 def check_design(axis: Axis, design: Design, simulate_before: bool = True,
                  feed_speeds=None) -> TuningResult:
-    """The checks of a given design without tuning: the axis' regime models, the dense
-    linear check of the design and of the axis' own one (``initial``) in every model, and
-    every requirement judged (as :func:`servotune.tuning.tune` ends).
+    """Return the checks of a given design without tuning.
 
-    ``feed_speeds`` [m/s] judges the axis feeding at these speeds instead of its own
-    ``[operation] feed_speeds`` (each gets its linear regime model, its claim and its share of
-    the thrust budget)."""
+    The axis' regime models, the dense linear check of the design and of the axis' own one
+    (``initial``) in every model, and every requirement judged (as
+    :func:`servotune.tuning.solve.tune` ends).
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+    design : Design
+        The design to check.
+    simulate_before : bool
+        Not used: the checks are linear.
+    feed_speeds : sequence of float, optional
+        Feed speeds [m/s] at which the axis is judged feeding instead of its own
+        ``[operation] feed_speeds`` (each gets its linear regime model, its claim and its
+        share of the thrust budget).
+
+    Returns
+    -------
+    TuningResult
+        ``success`` when every requirement check holds; no prediction, no active constraints,
+        statistics with zero starts and iterations.
+
+    Raises
+    ------
+    ValueError
+        If ``feed_speeds`` is given and the axis has no ``[operation]`` (no ``[drive]`` or no
+        ``[friction]``).
+    AxisFormatError
+        If the axis has no ``[friction]``.
+    """
     import dataclasses
     import time
 
@@ -525,24 +751,52 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
 
     Parameters
     ----------
-    free, chatter_weight, bounds : optional
-        Override the axis' ``[tuning]`` settings (see :func:`tuning_problem`).
-    c0 : float, optional
-        Initial guide-way damping [N s/m]; default the axis' viscous value.
+    axis : Axis
+        The axis description.
+    free : sequence of str, optional
+        Free variables among c, kv, kp, ti; default ``[tuning] free``.
+    chatter_weight : float, optional
+        Weight in [0, 1] of the chatter limit; default ``[tuning] chatter_weight``.
+    starts : int
+        Number of starting points of the tuning.
+    bounds : dict, optional
+        ``{name: (low, high)}`` merged over ``[tuning] bounds`` (see :func:`tuning_problem`).
+    seed : int
+        Seed of the starting points.
+    tolerance : float, optional
+        Relative tolerance of the grid exchange; default 1e-10 for a two-mass axis, else 1e-6.
     simulate : bool
         Also run the nonlinear verdict (:func:`servotune.verdict.nonlinear_verdict`); without
         it the design is checked on the linear models only and not called verified.
     executor : concurrent.futures.Executor, optional
         Runs the nonlinear simulations in parallel.
+    c0 : float, optional
+        Initial guide-way damping [N s/m]; default the axis' viscous value.
     callback : casadi.Callback, optional
         IPOPT's iteration callback (e.g. to honour an interruption).
     progress : callable, optional
         ``progress(done, total)`` of the nonlinear simulations.
 
+    Returns
+    -------
+    AxisTuning
+        The tuning result and the analyses before and after.
+
     Raises
     ------
-    RequirementsNotMetError, NoStableStartError, AxisFormatError
-        As :func:`servotune.tuning.tune` and the axis loader.
+    NoStableStartError, RequirementsNotMetError, TuningDidNotConvergeError
+        As :func:`servotune.tuning.solve.tune`.
+    ValueError
+        If ``chatter_weight`` lies outside [0, 1].
+    AxisFormatError
+        If the axis has no ``[friction]``, or a chatter weight is asked without
+        ``[cutting]``.
+
+    See Also
+    --------
+    servotune.axis.load_axis : reads the axis description.
+    servotune.tuning.solve.tune : the optimisation this runs.
+    servotune.tuning.verify.verify : the dense linear check of a design.
     """
     settings = axis.tuning
     free = settings.free if free is None else free
