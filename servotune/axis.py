@@ -68,6 +68,7 @@ from .structure.io import MatrixFileError, read_coordinates, read_structure
 from .structure.model import ModalModel, UnknownDofError
 from .structure.ports import Port, PortError, name_ports, read_ports
 from .structure.reduction import craig_bampton
+from .validation import finite, fraction, positive
 
 __all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis",
            "axis_from_tables", "structure_matrices"]
@@ -106,6 +107,22 @@ class Cutting:
     direction: str = "x"
     feed_per_tooth: float = 1e-4
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.setup, MillingSetup):
+            raise ValueError("Cutting.setup must be a servotune.chatter.MillingSetup, got "
+                             f"{type(self.setup).__name__}")
+        speeds = tuple(self.speed_rpm) if isinstance(self.speed_rpm, (tuple, list)) else ()
+        speeds = tuple(positive("Cutting", "speed_rpm", v, "rpm") for v in speeds)
+        if len(speeds) != 2 or not speeds[0] < speeds[1]:
+            raise ValueError(f"Cutting.speed_rpm must be (low, high) spindle speeds in rpm with "
+                             f"0 < low < high, got {self.speed_rpm!r}")
+        object.__setattr__(self, "speed_rpm", speeds)
+        if self.direction not in ("x", "y"):
+            raise ValueError(f"Cutting.direction must be 'x' (feed) or 'y', got "
+                             f"{self.direction!r}")
+        object.__setattr__(self, "feed_per_tooth",
+                           positive("Cutting", "feed_per_tooth", self.feed_per_tooth, "m"))
+
     def feed_speeds(self) -> tuple[float, float]:
         """Slide speeds [m/s] at the two ends of the spindle-speed range: f_z N n / 60."""
         return tuple(self.feed_per_tooth * self.setup.teeth * n / 60.0 for n in self.speed_rpm)
@@ -128,6 +145,41 @@ class TuningSettings:
     chatter_weight: float = 0.0
     friction_spread: Mapping = field(default_factory=lambda: MappingProxyType({}))
     friction_samples: tuple = ()
+
+    def __post_init__(self) -> None:
+        names = ("c", "kv", "kp", "ti")
+        free = (self.free,) if isinstance(self.free, str) else tuple(self.free)
+        if not free or len(set(free)) != len(free) or not set(free) <= set(names):
+            raise ValueError(f"TuningSettings.free must be distinct names among {names}, got "
+                             f"{self.free!r}")
+        object.__setattr__(self, "free", free)
+        bounds = {}
+        for key, pair in dict(self.bounds).items():
+            if key not in names:
+                raise ValueError(f"TuningSettings.bounds has {key!r}; give bounds of {names}")
+            low, high = (positive("TuningSettings", f"bounds[{key!r}]", v) for v in pair)
+            if len(tuple(pair)) != 2 or not low < high:
+                raise ValueError(f"TuningSettings.bounds[{key!r}] must be (low, high) with "
+                                 f"0 < low < high (SI), got {pair!r}")
+            bounds[key] = (low, high)
+        object.__setattr__(self, "bounds", MappingProxyType(bounds))
+        object.__setattr__(self, "chatter_weight", fraction(
+            "TuningSettings", "chatter_weight", self.chatter_weight, closed=True))
+        spread = {k: finite("TuningSettings", f"friction_spread[{k!r}]", v)
+                  for k, v in dict(self.friction_spread).items()}
+        samples = tuple((str(label), MappingProxyType(dict(values)))
+                        for label, values in self.friction_samples)
+        try:
+            from .friction.lugre import BIANCHI2014
+            from .regimes import friction_samples
+
+            friction_samples(BIANCHI2014, spread, samples)  # names and ranges
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"TuningSettings.friction_spread or friction_samples: {exc}; give "
+                             "fractions in (0, 1) for fc, fs, sigma1 and a factor > 1 for "
+                             "sigma0") from None
+        object.__setattr__(self, "friction_spread", MappingProxyType(spread))
+        object.__setattr__(self, "friction_samples", samples)
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,6 +221,39 @@ class Axis:
     tuning: TuningSettings = field(default_factory=TuningSettings)
     tables: Mapping = field(default_factory=lambda: MappingProxyType({}))
     defaults: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"Axis.name must be a non-empty str, got {self.name!r}")
+        if not isinstance(self.description, str):
+            raise ValueError(f"Axis.description must be a str, got {self.description!r}")
+        object.__setattr__(self, "path", Path(self.path))
+        for name, kind, optional in (
+                ("structure", ModalModel, False), ("friction", GuideWayFriction, True),
+                ("drive", Drive, True), ("cutting", Cutting, True),
+                ("operation", Operation, True), ("requirements", Requirements, False),
+                ("tuning", TuningSettings, False)):
+            value = getattr(self, name)
+            if not (isinstance(value, kind) or (optional and value is None)):
+                raise ValueError(f"Axis.{name} must be a {kind.__name__}"
+                                 + (" or None" if optional else "")
+                                 + f", got {type(value).__name__}")
+        dofs = set(self.structure.dofs)
+        named = [("friction.pads", pad) for pad in (self.friction.pads if self.friction else ())]
+        if self.drive is not None:
+            named += [("drive.motor.rotor", self.drive.motor.rotor)]
+            if self.drive.motor.stator is not None:
+                named += [("drive.motor.stator", self.drive.motor.stator)]
+            if self.drive.feedback == "linear":
+                named += [("drive.encoder", self.drive.encoder)]
+        for where, dof in named:
+            if dof not in dofs:
+                raise ValueError(f"Axis.{where} names DOF {dof!r}, which the structure does not "
+                                 "have; name a DOF of Axis.structure "
+                                 f"({sorted(d for d in dofs if not d.startswith('mode.'))})")
+        if not isinstance(self.tables, Mapping):
+            raise ValueError(f"Axis.tables must be a mapping, got {type(self.tables).__name__}")
+        object.__setattr__(self, "defaults", tuple(str(d) for d in self.defaults))
 
     @property
     def file(self) -> Path:

@@ -46,6 +46,7 @@ import control
 import numpy as np
 
 from .units import KV_PER_M_PER_MIN_PER_MM, kv_from_m_per_min_per_mm, kv_to_m_per_min_per_mm
+from .validation import fraction, positive
 
 __all__ = [
     "KV_PER_M_PER_MIN_PER_MM",
@@ -65,15 +66,6 @@ __all__ = [
     "cascade_response",
     "current_loop_bandwidth",
 ]
-
-def _positive(owner: str, name: str, value, allow_zero: bool = False,
-              allow_inf: bool = False) -> float:
-    value = float(value)
-    ok = (value >= 0.0 if allow_zero else value > 0.0) and not math.isnan(value)
-    if not ok or (math.isinf(value) and not allow_inf):
-        need = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{owner}.{name} must be finite and {need}, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -103,8 +95,10 @@ class Motor:
     stator: str | None = "motor.stator"
 
     def __post_init__(self) -> None:
-        for name in ("torque_constant", "back_emf_constant", "resistance", "inductance"):
-            object.__setattr__(self, name, _positive("Motor", name, getattr(self, name)))
+        units = {"torque_constant": "N m/A", "back_emf_constant": "V s/rad",
+                 "resistance": "ohm", "inductance": "H"}
+        for name, unit in units.items():
+            object.__setattr__(self, name, positive("Motor", name, getattr(self, name), unit))
 
     @property
     def electrical_time_constant(self) -> float:
@@ -146,10 +140,11 @@ class DriveLimits:
     speed_max: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("torque_peak", "torque_continuous", "speed_max"):
+        for name, unit in (("torque_peak", "N m"), ("torque_continuous", "N m"),
+                           ("speed_max", "rad/s")):
             if getattr(self, name) is not None or name != "speed_max":
-                object.__setattr__(self, name, _positive("DriveLimits", name,
-                                                         getattr(self, name)))
+                object.__setattr__(self, name, positive("DriveLimits", name,
+                                                        getattr(self, name), unit))
         if self.torque_continuous > self.torque_peak:
             raise ValueError(f"DriveLimits.torque_continuous ({self.torque_continuous:g} N m) "
                              f"exceeds torque_peak ({self.torque_peak:g} N m)")
@@ -177,8 +172,9 @@ class PIController:
     ti: float = math.inf
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "kp", _positive("PIController", "kp", self.kp))
-        object.__setattr__(self, "ti", _positive("PIController", "ti", self.ti, allow_inf=True))
+        object.__setattr__(self, "kp", positive("PIController", "kp", self.kp))
+        object.__setattr__(self, "ti", positive("PIController", "ti", self.ti, "s",
+                                                allow_inf=True))
 
     def transfer_function(self) -> control.TransferFunction:
         """Return the controller as a python-control transfer function.
@@ -226,9 +222,9 @@ class LowPassFilter:
     damping_ratio: float = math.sqrt(0.5)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "f_hz", _positive("LowPassFilter", "f_hz", self.f_hz))
+        object.__setattr__(self, "f_hz", positive("LowPassFilter", "f_hz", self.f_hz, "Hz"))
         object.__setattr__(self, "damping_ratio",
-                           _positive("LowPassFilter", "damping_ratio", self.damping_ratio))
+                           positive("LowPassFilter", "damping_ratio", self.damping_ratio))
 
     def transfer_function(self) -> control.TransferFunction:
         """Return the filter as a python-control transfer function (unit static gain).
@@ -256,12 +252,11 @@ class NotchFilter:
     depth: float = 0.1
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "f_hz", _positive("NotchFilter", "f_hz", self.f_hz))
-        object.__setattr__(self, "width", _positive("NotchFilter", "width", self.width))
-        depth = _positive("NotchFilter", "depth", self.depth, allow_zero=True)
-        if depth >= 1.0:
-            raise ValueError(f"NotchFilter.depth must be in [0, 1), got {depth!r}")
-        object.__setattr__(self, "depth", depth)
+        object.__setattr__(self, "f_hz", positive("NotchFilter", "f_hz", self.f_hz, "Hz"))
+        object.__setattr__(self, "width", positive("NotchFilter", "width", self.width))
+        object.__setattr__(self, "depth", fraction(
+            "NotchFilter", "depth", self.depth,
+            hint="it is the gain at the notch frequency (0 for a full notch)"))
 
     def transfer_function(self) -> control.TransferFunction:
         """Return the notch as a python-control transfer function (gain ``depth`` at f_hz).
@@ -331,7 +326,7 @@ def pade_order(delay: float, omega_max: float,
     >>> pade_order(187.5e-6, 2 * math.pi * 3000.0)
     4
     """
-    delay = _positive("pade_order", "delay", delay)
+    delay = positive("pade_order", "delay", delay, "s")
     x = min(float(omega_max) * delay, math.pi)
     for order in range(1, PADE_MAX_ORDER + 1):
         num, den = control.pade(1.0, order)
@@ -381,7 +376,7 @@ def pade_delay(delay: float, order: int, inputs: str, outputs: str,
     (1.0, -18.0)
     """
     a, b, c, d = _pade_unit(order)
-    t = _positive("pade_delay", "delay", delay)
+    t = positive("pade_delay", "delay", delay, "s")
     return control.ss(a / t, b / t, c, d, inputs=inputs, outputs=outputs, name=name,
                       states=[f"{name}_{i}" for i in range(a.shape[0])])
 
@@ -444,10 +439,11 @@ class Sampling:
     def __post_init__(self) -> None:
         for name in ("current_period", "velocity_period", "position_period",
                      "computation_delay", "speed_filter"):
-            object.__setattr__(self, name, _positive("Sampling", name, getattr(self, name),
-                                                     allow_zero=True))
+            unit = "periods" if name == "computation_delay" else "s"
+            object.__setattr__(self, name, positive("Sampling", name, getattr(self, name), unit,
+                                                    allow_zero=True))
         object.__setattr__(self, "pade_frequency",
-                           _positive("Sampling", "pade_frequency", self.pade_frequency))
+                           positive("Sampling", "pade_frequency", self.pade_frequency, "rad/s"))
         for name in ("current_period", "velocity_period", "position_period", "speed_filter"):
             if getattr(self, name) > 1.0:
                 raise ValueError(f"Sampling.{name} is {getattr(self, name):g} s; give it in "
@@ -637,18 +633,18 @@ class Drive:
     limits: DriveLimits | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "ratio", _positive("Drive", "ratio", self.ratio))
+        object.__setattr__(self, "ratio", positive("Drive", "ratio", self.ratio, "m/rad"))
         for name, kind in (("sampling", Sampling), ("limits", DriveLimits)):
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Drive.{name} must be a {kind.__name__} or None")
-        object.__setattr__(self, "kv", _positive("Drive", "kv", self.kv))
+        object.__setattr__(self, "kv", positive("Drive", "kv", self.kv, "1/s"))
         if self.feedback not in ("linear", "motor"):
             raise ValueError(f"Drive.feedback must be 'linear' or 'motor', got {self.feedback!r}")
-        object.__setattr__(self, "velocity_feedforward", _positive(
+        object.__setattr__(self, "velocity_feedforward", positive(
             "Drive", "velocity_feedforward", self.velocity_feedforward, allow_zero=True))
-        object.__setattr__(self, "torque_feedforward_inertia", _positive(
-            "Drive", "torque_feedforward_inertia", self.torque_feedforward_inertia,
+        object.__setattr__(self, "torque_feedforward_inertia", positive(
+            "Drive", "torque_feedforward_inertia", self.torque_feedforward_inertia, "kg m^2",
             allow_zero=True))
         for name, kind in (("motor", Motor), ("current_loop", PIController),
                            ("velocity_loop", PIController)):

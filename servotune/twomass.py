@@ -41,6 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
+from .validation import positive
+
 __all__ = [
     "TwoMassSystem",
     "TwoMassAnalysis",
@@ -56,13 +58,6 @@ __all__ = [
 ]
 
 LAYOUTS = ("A", "B")
-
-
-def _check_positive(name: str, value: float) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -103,9 +98,9 @@ class TwoMassSystem:
     layout: str = "B"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "m1", _check_positive("m1", self.m1))
-        object.__setattr__(self, "k", _check_positive("k", self.k))
-        object.__setattr__(self, "alpha", _check_positive("alpha", self.alpha))
+        for name, unit in (("m1", "kg"), ("k", "N/m"), ("alpha", "(M2/M1)")):
+            object.__setattr__(self, name, positive("TwoMassSystem", name, getattr(self, name),
+                                                    unit))
         layout = str(self.layout).upper()
         if layout not in LAYOUTS:
             raise ValueError(f"layout must be 'A' or 'B', got {self.layout!r}")

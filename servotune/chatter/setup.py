@@ -56,6 +56,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..validation import positive
+
 __all__ = [
     "DIRECTIONS",
     "MillingSetup",
@@ -67,17 +69,6 @@ __all__ = [
 MILLING_MODES = ("down", "up")
 #: the two directions in the plane of the cut, in the order of the 2 x 2 matrices
 DIRECTIONS = ("x", "y")
-
-
-def _positive(name: str, value, allow_zero: bool = False) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(value) or value < 0.0 or (value == 0.0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be finite and {bound}, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -135,20 +126,23 @@ class MillingSetup:
         if isinstance(teeth, bool) or not float(teeth).is_integer() or teeth < 1:
             raise ValueError(f"teeth must be a whole number >= 1, got {teeth!r}")
         object.__setattr__(self, "teeth", int(teeth))
-        object.__setattr__(self, "kt", _positive("kt (tangential cutting coefficient, N/m^2)",
-                                                 self.kt))
-        object.__setattr__(self, "kn", _positive("kn (normal cutting coefficient, N/m^2)",
-                                                 self.kn, allow_zero=True))
-        ae = _positive("radial_immersion (a/D)", self.radial_immersion)
+        object.__setattr__(self, "kt", positive("MillingSetup", "kt", self.kt, "N/m^2",
+                                                "give the tangential cutting coefficient K_t"))
+        object.__setattr__(self, "kn", positive("MillingSetup", "kn", self.kn, "N/m^2",
+                                                "give the normal cutting coefficient K_n",
+                                                allow_zero=True))
+        ae = positive("MillingSetup", "radial_immersion", self.radial_immersion, "(a/D)",
+                      "give a/D in (0, 1]; 1 is a full slot")
         if ae > 1.0:
-            raise ValueError(f"radial_immersion (a/D) must lie in (0, 1], got {ae!r}; "
-                             "1 is a full slot")
+            raise ValueError(f"MillingSetup.radial_immersion (a/D) must lie in (0, 1], got "
+                             f"{ae!r}; 1 is a full slot")
         object.__setattr__(self, "radial_immersion", ae)
         milling = str(self.milling).lower()
         if milling not in MILLING_MODES:
             raise ValueError(f"milling must be 'down' or 'up', got {self.milling!r}")
         object.__setattr__(self, "milling", milling)
-        helix = _positive("helix_angle (rad)", self.helix_angle, allow_zero=True)
+        helix = positive("MillingSetup", "helix_angle", self.helix_angle, "rad",
+                         allow_zero=True)
         if helix >= math.pi / 2:
             raise ValueError(f"helix_angle must be in [0, pi/2) rad, got {helix!r}")
         object.__setattr__(self, "helix_angle", helix)
@@ -188,7 +182,8 @@ class MillingSetup:
         >>> MillingSetup.from_ratio(teeth=4, kt=2e9, kr=0.3).kn
         600000000.0
         """
-        kr = _positive("kr (radial force ratio Kn/Kt, dimensionless)", kr, allow_zero=True)
+        kr = positive("MillingSetup.from_ratio", "kr", kr, "",
+                      "give the dimensionless ratio K_n/K_t", allow_zero=True)
         return cls(teeth=teeth, kt=kt, kn=kr * float(kt), radial_immersion=radial_immersion,
                    milling=milling, helix_angle=helix_angle)
 

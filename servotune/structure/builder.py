@@ -22,6 +22,8 @@ import itertools
 import numpy as np
 import scipy.sparse
 
+from ..validation import positive
+
 __all__ = ["NODE_DOFS", "StructureBuilder"]
 
 NODE_DOFS = ("x", "y", "z", "rx", "ry", "rz")
@@ -198,11 +200,14 @@ class StructureBuilder:
         KeyError
             When an end node does not exist.
         """
-        for name, v in (("e", e), ("area", area), ("iy", iy), ("iz", iz), ("torsion", torsion),
-                        ("rho", rho), ("nu", nu)):
-            if not np.isfinite(v) or v < 0 or (v == 0 and name in ("e", "area")):
-                raise ValueError(f"beam {node1}-{node2}: {name} must be positive, got {v!r}")
-        g = e / (2.0 * (1.0 + nu)) if g is None else g
+        owner = f"beam {node1}-{node2}:"
+        e = positive(owner, "e", e, "Pa")
+        area = positive(owner, "area", area, "m^2")
+        iy, iz, torsion = (positive(owner, name, v, "m^4", allow_zero=True)
+                           for name, v in (("iy", iy), ("iz", iz), ("torsion", torsion)))
+        rho = positive(owner, "rho", rho, "kg/m^3", allow_zero=True)
+        nu = positive(owner, "nu", nu, allow_zero=True)
+        g = e / (2.0 * (1.0 + nu)) if g is None else positive(owner, "g", g, "Pa")
         p1, p2 = self._nodes[node1], self._nodes[node2]
         length = float(np.linalg.norm(p2 - p1))
         if length == 0:
@@ -247,8 +252,8 @@ class StructureBuilder:
             When the mass or an inertia is negative or not finite, ``inertia`` is given for a
             DOF rather than a node, or the DOF is unknown.
         """
-        if not np.isfinite(mass) or mass < 0:
-            raise ValueError(f"mass at {dof_or_node!r} must be >= 0, got {mass!r}")
+        mass = positive(f"mass at {dof_or_node!r}:", "mass", mass, "kg (kg m^2 on a rotation)",
+                        allow_zero=True)
         if dof_or_node in self._nodes:
             diag = np.concatenate([[mass] * 3, np.zeros(3) if inertia is None
                                    else np.asarray(inertia, dtype=float)])
@@ -280,8 +285,8 @@ class StructureBuilder:
         ValueError
             When the stiffness is negative or not finite, or a DOF is unknown.
         """
-        if not np.isfinite(stiffness) or stiffness < 0:
-            raise ValueError(f"spring stiffness must be >= 0, got {stiffness!r}")
+        stiffness = positive(f"spring on {sorted(terms)}:", "stiffness", stiffness,
+                             "N/m (N m/rad)", allow_zero=True)
         idx = np.array([self.index(n) for n in terms])
         c = np.array([float(v) for v in terms.values()])
         self._k.append((idx, stiffness * np.outer(c, c)))

@@ -85,6 +85,13 @@ def _check_matrix(name: str, a, n: int | None = None) -> np.ndarray:
     return 0.5 * (a + a.T)
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A C-contiguous copy of ``a`` that refuses in-place changes."""
+    a = np.array(a, dtype=float, order="C")
+    a.setflags(write=False)
+    return a
+
+
 @dataclass(frozen=True)
 class ReductionInfo:
     """How a model was reduced by Craig-Bampton: what its fixed-interface modes cover.
@@ -180,6 +187,15 @@ class ModalModel:
         positive definite; a stiffness matrix with a negative eigenvalue; duplicate DOF names;
         damping ratios outside [0, 1).
 
+    Notes
+    -----
+    The model keeps read-only copies of its matrices (``mass``, ``stiffness``, ``damping``,
+    ``damping_ratio``), so that its modes, computed once, always belong to them: an in-place
+    change such as ``model.stiffness[0, 0] = 1.0`` raises ``ValueError``. Vary a model with
+    ``dataclasses.replace``: ``replace(model, stiffness=k)`` keeps the physical damping matrix
+    of ``model``; ``replace(model, stiffness=k, damping=None)`` re-assigns its modal damping
+    ratios to the new modes (as :meth:`with_damping` does).
+
     Examples
     --------
     A 1000 kg slide on a 4e7 N/m spring rings at sqrt(k/m):
@@ -187,6 +203,9 @@ class ModalModel:
     >>> model = ModalModel([[1000.0]], [[4e7]], ["slide.x"])
     >>> float(model.natural_frequencies()[0])
     200.0
+    >>> import dataclasses
+    >>> float(dataclasses.replace(model, stiffness=[[9e7]]).natural_frequencies()[0])
+    300.0
     """
 
     mass: np.ndarray
@@ -229,18 +248,22 @@ class ModalModel:
         else:
             zeta = np.broadcast_to(np.asarray(self.damping_ratio, dtype=float), (n,)).copy()
             if not np.all(np.isfinite(zeta)) or np.any(zeta < 0.0) or np.any(zeta >= 1.0):
-                raise ValueError(f"damping_ratio must lie in [0, 1), got {self.damping_ratio!r}")
+                raise ValueError(f"ModalModel.damping_ratio must lie in [0, 1), got "
+                                 f"{self.damping_ratio!r}; give one ratio, or one per mode")
             mphi = m @ phi
             d = mphi @ np.diag(2.0 * zeta * omega) @ mphi.T
             d = 0.5 * (d + d.T)
-        object.__setattr__(self, "mass", m)
-        object.__setattr__(self, "stiffness", k)
-        object.__setattr__(self, "dofs", dofs)
-        object.__setattr__(self, "damping", d)
-        object.__setattr__(self, "damping_ratio", zeta if self.damping is None else None)
         if self.reduction is not None and not isinstance(self.reduction, ReductionInfo):
-            raise ValueError("reduction must be a ReductionInfo or None")
-        object.__setattr__(self, "_modes", (omega, phi))
+            raise ValueError("ModalModel.reduction must be a ReductionInfo or None, got "
+                             f"{type(self.reduction).__name__}")
+        # private read-only copies: the cached modes below stay those of these matrices
+        object.__setattr__(self, "mass", _read_only(m))
+        object.__setattr__(self, "stiffness", _read_only(k))
+        object.__setattr__(self, "dofs", dofs)
+        object.__setattr__(self, "damping_ratio",  # the ratios given, None for a matrix
+                           _read_only(zeta) if self.damping is None else None)
+        object.__setattr__(self, "damping", _read_only(d))
+        object.__setattr__(self, "_modes", (_read_only(omega), _read_only(phi)))
         object.__setattr__(self, "_ports", {})
 
     # -- names ---------------------------------------------------------------------------

@@ -10,6 +10,7 @@ from ..regimes import RegimeModel
 from ..requirements import Requirements
 from ..structure.model import ModalModel
 from ..thrust import ThrustBudget
+from ..validation import positive
 
 __all__ = ["VARIABLES", "ChatterTarget", "Design", "NoStableStartError",
            "RequirementsNotMetError", "TuningDidNotConvergeError", "TuningProblem"]
@@ -97,14 +98,15 @@ class Design:
     Raises
     ------
     ValueError
-        A value that is not a positive finite number (Ti may be inf: no integral action).
+        A value that is not a positive finite number (Ti may be inf: no integral action), or
+        None for C; the message names the field and its unit.
 
     Examples
     --------
     >>> Design(c=-1.0)
     Traceback (most recent call last):
     ...
-    ValueError: Design.c must be a finite number > 0 (N s/m), got -1.0
+    ValueError: Design.c must be finite and > 0 N s/m, got -1.0
     """
 
     c: float
@@ -118,14 +120,7 @@ class Design:
             value = getattr(self, name)
             if value is None and name != "c":
                 continue
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise ValueError(f"Design.{name} must be a number, got {value!r}") from None
-            ok = value > 0 and (math.isfinite(value) or (name == "ti" and value == math.inf))
-            if not ok:
-                raise ValueError(f"Design.{name} must be a finite number > 0 ({units[name]}), "
-                                 f"got {value!r}")
+            value = positive("Design", name, value, units[name], allow_inf=(name == "ti"))
             object.__setattr__(self, name, value)
 
     def to_dict(self) -> dict:
