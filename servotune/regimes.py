@@ -85,6 +85,17 @@ class Operation:
         Whether the axis also cuts standing still (the standing regime).
     defaults : tuple of str
         Which values were defaulted and from what (shown to the user).
+
+    Raises
+    ------
+    ValueError
+        If a speed, the acceleration or the process force is not finite and > 0, the feed
+        force is negative or not finite, a feed speed exceeds the rapid speed, or the axis
+        neither stands nor feeds (``standing=False`` and no feed speeds).
+
+    Notes
+    -----
+    The feed speeds are stored sorted, without repeats.
     """
 
     feed_speeds: tuple[float, ...] = ()
@@ -117,6 +128,13 @@ class Operation:
             raise ValueError("Operation: no regime left (standing = false and no feed_speeds)")
 
     def to_dict(self) -> dict:
+        """Return the operation as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The fields by name (SI), tuples as lists.
+        """
         return {"feed_speeds": list(self.feed_speeds), "rapid_speed": self.rapid_speed,
                 "acceleration": self.acceleration, "process_force_pp": self.process_force_pp,
                 "feed_force": self.feed_force, "standing": self.standing,
@@ -124,8 +142,24 @@ class Operation:
 
 
 def stribeck_slope(params: LuGreParameters, speed: float) -> float:
-    """dF/dv of the steady sliding friction at ``speed`` [N s/m], sigma2 included: negative
-    below the Stribeck speed where the friction falls faster than sigma2 rises."""
+    """Return dF/dv of the steady sliding friction, sigma2 included.
+
+    ``dF_ss/dv = g'(v) sgn(v) + sigma2`` with ``g(v) = Fc + (Fs - Fc) exp(-|v/vs|^delta)``
+    (:func:`servotune.friction.lugre.steady_state_slope`): negative below the Stribeck speed
+    where the friction falls faster than sigma2 rises.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The friction (axis totals).
+    speed : float
+        Sliding speed [m/s]; at 0 the slope of g is taken as 0.
+
+    Returns
+    -------
+    float
+        The slope [N s/m].
+    """
     from .friction.lugre import steady_state_slope
 
     return float(steady_state_slope(params, speed))
@@ -141,6 +175,9 @@ class RegimeModel:
         The operating regime it belongs to (``"standing"``, ``"feeding 30 mm/s"``,
         ``"viscous"``); a regime's claim is the worst of its models.
     kind : {"presliding", "describing", "sliding", "viscous"}
+        The guide-way model: LuGre presliding (spring sigma0, damper sigma1), the LuGre
+        describing function at ``amplitude`` and ``frequency``, LuGre linearised about steady
+        sliding at ``speed``, or the viscous damper C alone.
     friction : LuGreParameters, optional
         The friction (axis totals) of the model; its sigma2 is replaced by the design's C.
     speed : float
@@ -153,6 +190,12 @@ class RegimeModel:
     cutting : bool
         Whether the axis cuts in this regime (its compliance is judged); False for a regime
         that only moves the axis (rapid traverse), where only the loops are judged.
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is unknown, a non-viscous model has no LuGre friction, a sliding model no
+        speed > 0, or a describing-function model no finite amplitude and frequency > 0.
     """
 
     regime: str
@@ -193,8 +236,23 @@ class RegimeModel:
         return text + ("" if self.sample == "nominal" else f" ({self.sample})")
 
     def impedance(self, omega) -> np.ndarray:
-        """The contact impedance without the viscous part, Z_0(jw) [N/m] (axis total): the
-        pad force per pad displacement."""
+        """Return the contact impedance without the viscous part, Z_0(jw) (axis total).
+
+        The pad force per pad displacement: 0 for the viscous model; ``sigma0 + jw sigma1``
+        presliding; ``Keq + jw Ceq`` for the describing function (computed with sigma2 = 0);
+        ``jw G(jw)`` sliding, with G the LuGre sliding linearisation (sigma2 = 0) from velocity
+        to force (:func:`servotune.friction.lugre.sliding_linearisation`).
+
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies [rad/s].
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex impedance [N/m], the shape of ``omega``.
+        """
         s = 1j * np.asarray(omega, dtype=float)
         p = self.friction
         if self.kind == "viscous":
@@ -209,7 +267,20 @@ class RegimeModel:
         return s * (c * b / (s - a) + d)
 
     def contact(self, c: float) -> Contact:
-        """The python-control contact of the model with total viscous damping ``c`` [N s/m]."""
+        """Return the python-control contact of the model with total viscous damping ``c``.
+
+        Parameters
+        ----------
+        c : float
+            Total viscous guide-way damping C [N s/m], in place of the LuGre sigma2.
+
+        Returns
+        -------
+        Contact
+            ``Contact.viscous(c)``; presliding ``Contact.stiction(sigma0, sigma1, c)``;
+            describing function a sliding contact ``F = Keq x + (Ceq + c) v``; sliding the
+            LuGre sliding linearisation with sigma2 = c at the model's speed.
+        """
         c = float(c)
         if self.kind == "viscous":
             return Contact.viscous(c)
@@ -227,16 +298,53 @@ class RegimeModel:
                                                      self.speed), self.speed)
 
     def with_amplitude(self, amplitude: float, frequency: float) -> RegimeModel:
-        """The describing-function model at another amplitude and frequency."""
+        """Return the model at another amplitude and frequency.
+
+        For a describing-function model, Keq and Ceq are computed anew there.
+
+        Parameters
+        ----------
+        amplitude : float
+            Pad vibration amplitude [m].
+        frequency : float
+            Angular frequency [rad/s].
+
+        Returns
+        -------
+        RegimeModel
+            A copy with the new amplitude and frequency.
+
+        Raises
+        ------
+        ValueError
+            If the model is a describing-function one and a value is not finite and > 0.
+        """
         return dataclasses.replace(self, amplitude=float(amplitude), frequency=float(frequency))
 
     def slope(self) -> float | None:
-        """The sliding model's steady friction slope dF/dv with sigma2 = 0 [N s/m]."""
+        """Return the sliding model's steady friction slope dF/dv with sigma2 = 0.
+
+        Returns
+        -------
+        float or None
+            ``g'(v) sgn(v)`` [N s/m] at the model's speed (see :func:`stribeck_slope`); None
+            when the model is not a sliding one.
+        """
         if self.kind != "sliding":
             return None
         return stribeck_slope(dataclasses.replace(self.friction, sigma2=0.0), self.speed)
 
     def to_dict(self) -> dict:
+        """Return the model as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            Regime, kind (``model``), name, sample, speed [m/s] and cutting; a
+            describing-function model adds amplitude [m], frequency [Hz], Keq [N/m] and Ceq
+            without C [N s/m]; a sliding one the friction slope without C [N s/m] and the
+            friction level g(v) [N].
+        """
         out = {"regime": self.regime, "model": self.kind, "name": self.name,
                "sample": self.sample, "speed_m_per_s": self.speed, "cutting": self.cutting}
         if self.kind == "describing":
@@ -251,14 +359,35 @@ class RegimeModel:
 
 def friction_samples(params: LuGreParameters, spread: dict | None,
                      extra=()) -> list[tuple[str, LuGreParameters]]:
-    """The nominal friction, the corners of a spread and further given samples.
+    """Return the nominal friction, the corners of a spread and further given samples.
 
-    ``spread`` maps parameter names to a relative spread: ``fc``, ``fs``, ``sigma1``: +-
-    fraction (0.3 = 30 %); ``sigma0``: a factor (3.0 = x/÷ 3). Each parameter gives a low and
-    a high sample, the others nominal (one-at-a-time corners: the extremes of a monotone
-    response; the corners of all combinations would grow as 2^n). ``extra`` are
-    ``(label, {parameter: value})`` samples, e.g. a study's worst ones
-    (:func:`servotune.study.spread_from_study`): the named parameters replace the nominal ones.
+    Each parameter of the spread gives a low and a high sample, the others nominal
+    (one-at-a-time corners: the extremes of a monotone response; the corners of all
+    combinations would grow as 2^n). A corner that moves Fc above Fs raises Fs with it, and
+    one that moves Fs below Fc lowers Fc with it.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The nominal friction.
+    spread : dict or None
+        Parameter name -> relative spread: ``fc``, ``fs``, ``sigma1``: +- fraction in (0, 1)
+        (0.3 = 30 %); ``sigma0``: a factor > 1 (3.0 = x/÷ 3).
+    extra : sequence of (str, dict)
+        ``(label, {parameter: value})`` samples, e.g. a study's worst ones
+        (:func:`servotune.study.spread.spread_from_study`): the named parameters replace the
+        nominal ones.
+
+    Returns
+    -------
+    list of (str, LuGreParameters)
+        ``("nominal", params)``, the extra samples, then the low and high corner of each
+        spread parameter, in the order given.
+
+    Raises
+    ------
+    ValueError
+        If ``spread`` names another parameter, or a spread lies outside its range.
     """
     out = [("nominal", params)]
     for label, values in extra:
@@ -292,20 +421,38 @@ def regime_models(friction: LuGreParameters | None, operation: Operation | None,
                   amplitude: float | None = None, frequency: float | None = None,
                   spread: dict | None = None, viscous_only: bool = False,
                   extra_samples=()) -> tuple[RegimeModel, ...]:
-    """The linear models of an axis' regimes.
+    """Return the linear models of an axis' regimes.
+
+    For each friction sample (:func:`friction_samples`): when the axis stands, the presliding
+    model and, with ``amplitude`` and ``frequency``, the describing-function model of the
+    standing regime; a sliding model per feed speed.
 
     Parameters
     ----------
     friction : LuGreParameters, optional
-        The axis' friction (None or ``viscous_only``: the viscous model alone).
-    operation : Operation
+        The axis' friction (None: the viscous model alone).
+    operation : Operation, optional
+        How the axis works (None: the viscous model alone).
     amplitude, frequency : float, optional
         Pad vibration amplitude [m] and angular frequency [rad/s] at the process force; when
         given, the standing regime gets the describing-function model there.
     spread : dict, optional
         Friction spread (see :func:`friction_samples`): further models of every regime.
+    viscous_only : bool
+        Return the viscous model alone.
     extra_samples : sequence of (str, dict), optional
         Further friction samples (see :func:`friction_samples`).
+
+    Returns
+    -------
+    tuple of RegimeModel
+        The models, sample by sample (nominal first); ``(RegimeModel("viscous",
+        "viscous"),)`` for the viscous model alone.
+
+    Raises
+    ------
+    ValueError
+        As :func:`friction_samples` and :class:`RegimeModel`.
     """
     if viscous_only or friction is None or operation is None:
         return (RegimeModel("viscous", "viscous"),)
