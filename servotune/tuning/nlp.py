@@ -419,12 +419,18 @@ class Solver:
             mask_loop = ca.MX.sym("loop_mask", n_loop * n_models)
             params.append(ca.vec(data_loop))
             loops = kernels.loop.map(n_loop * n_models)(p, data_loop)
-            loop_cols = list(range(n_loop * n_models))
-            loop_models = [j // n_loop for j in loop_cols]
+            all_cols = list(range(n_loop * n_models))
+            # the gated rows apply to the moving models only (elsewhere the kernel switches
+            # them off and they always hold): they are left out of the NLP there
+            moving = set(problem.moving_models)
+            moving_cols = [j for j in all_cols if j // n_loop in moving]
             for i, group in enumerate(kernels.loop_rows):
                 lo = 1.0 if group.startswith("Ms") else 0.0
-                add(loops[i, :].T * mask_loop + (1.0 - mask_loop) * (lo + 1.0), lo, ca.inf,
-                    group, loop_models, loop_cols)
+                cols = all_cols if group.startswith("Ms") else moving_cols
+                if not cols:
+                    continue
+                row = loops[i, cols].T * mask_loop[cols] + (1.0 - mask_loop[cols]) * (lo + 1.0)
+                add(row, lo, ca.inf, group, [j // n_loop for j in cols], cols)
         # constraints without frequencies: thrust cases, kv_min
         rest_start = len(lbg)
         if problem.thrust is not None and "c" in free:
@@ -477,11 +483,24 @@ class Solver:
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", len(self.lbg))
         groups = np.array(self.groups)
 
+        columns = np.array([-1 if c is None else c for _, _, c in self.rows])
+
         def weights(names, n_cols, mask):
+            """Each group's multipliers (times the mask) spread over the data columns."""
             rows = []
             for name in names:
                 idx = np.nonzero(groups == name)[0].tolist()
-                rows.append((lam_g[idx] * mask).T if idx else ca.MX.zeros(1, n_cols))
+                if not idx:
+                    rows.append(ca.MX.zeros(1, n_cols))
+                    continue
+                cols = columns[idx].tolist()
+                if cols == list(range(n_cols)):
+                    rows.append((lam_g[idx] * mask).T)
+                    continue
+                # the row covers some columns only: multipliers scattered, zero elsewhere
+                spread = ca.MX.zeros(n_cols, 1)
+                spread[cols] = lam_g[idx] * mask[cols]
+                rows.append(spread.T)
             return ca.vertcat(*rows)
 
         n_band_cols = self.n_band * n_cut
