@@ -9,10 +9,11 @@ verdict holds a design ``verified`` only when
 (b) in every cutting regime the time simulation of the axis with LuGre friction at every pad
     (the design's C as the viscous part sigma2, the digital drive's delays as in the linear
     model) peaks at or below the claim within ``nonlinear_tolerance`` (default 30 %), at the
-    process force (the cutting-force amplitude at the required depth) and at a smaller and a
-    larger force; stays stable (the response decays once the force stops); shows no stick-slip
-    limit cycle while feeding (a run at the feed speed without force settles); keeps the motor
-    torque within its peak; and has no peak at an edge of the swept band.
+    process force (the cutting-force amplitude at the required depth), at a larger force (3
+    times) and, standing, at a smaller one (a quarter); stays stable (the response decays once
+    the force stops); shows no stick-slip limit cycle while feeding (a run at the feed speed
+    without force settles); keeps the motor torque within its peak; and has no peak at an edge
+    of the swept band.
 
 The sweep band is the requirements band widened to hold every mode that carries work-piece
 motion and every predicted peak before and after. The sweep is slow where the linear models
@@ -77,6 +78,14 @@ class Simulation:
     envelope: tuple = field(default=(), repr=False)   # (f_hz, m_per_n) arrays, for figures
 
     def to_dict(self) -> dict:
+        """Return the run as JSON-ready data (without the envelope).
+
+        Returns
+        -------
+        dict
+            The fields under names with their units (``force_pp_n``, ``peak_m_per_n``,
+            ``simulated_s``, ...).
+        """
         return {"regime": self.regime, "design": self.design, "kind": self.kind,
                 "force_pp_n": self.force_pp, "speed_m_per_s": self.speed,
                 "band_hz": list(self.band_hz), "peak_m_per_n": self.peak,
@@ -118,6 +127,15 @@ class RegimeVerdict:
         return self.claimed_peak_before / self.claimed_peak
 
     def to_dict(self) -> dict:
+        """Return the regime's verdict as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The fields under names with their units, the realised (nonlinear before over
+            after) and linear (claim before over claim after) improvements, and the
+            simulations.
+        """
         return {"name": self.name, "speed_m_per_s": self.speed, "models": list(self.models),
                 "claimed_peak_m_per_n": self.claimed_peak,
                 "claimed_peak_before_m_per_n": self.claimed_peak_before,
@@ -148,6 +166,14 @@ class Verdict:
         return "VERIFIED" if self.verified else "NOT VERIFIED"
 
     def to_dict(self) -> dict:
+        """Return the verdict as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``verified``, ``label``, what held, the tolerance, the reasons, what was checked
+            and what not, and each regime's verdict.
+        """
         return {"verified": self.verified, "label": self.label,
                 "linear_holds": self.linear_holds, "nonlinear_holds": self.nonlinear_holds,
                 "tolerance": self.tolerance, "reasons": list(self.reasons),
@@ -163,8 +189,26 @@ def _local_maxima(omega, mag, significance=0.1, count=6):
 
 
 def predicted_resonances(omega, h) -> list[tuple[float, float]]:
-    """(frequency [Hz], damping ratio) of the peaks of a compliance curve, the damping from
-    the half-power width (0.02 when the width cannot be read)."""
+    """Return the frequency and damping ratio of the peaks of a compliance curve.
+
+    The peaks are the local maxima of ``|h|`` that reach 10 % of the largest, at most 6,
+    largest first. The damping ratio comes from the half-power width,
+    ``zeta = (w_hi - w_lo) / (2 w_peak)`` with ``|h(w_lo)|, |h(w_hi)| <= |h(w_peak)|/sqrt(2)``
+    the nearest such points on either side, at least 0.003; 0.02 when the width cannot be
+    read within the grid; at most 0.3.
+
+    Parameters
+    ----------
+    omega : numpy.ndarray
+        Angular frequencies [rad/s], increasing.
+    h : numpy.ndarray
+        Complex (or magnitude) compliance on ``omega`` [m/N].
+
+    Returns
+    -------
+    list of (float, float)
+        ``(frequency [Hz], damping ratio)`` of each peak.
+    """
     mag = np.abs(h)
     out = []
     for i in _local_maxima(omega, mag):
@@ -183,8 +227,25 @@ def predicted_resonances(omega, h) -> list[tuple[float, float]]:
 
 
 def sweep_band(requirement_band, resonances_hz, modes_hz=()) -> tuple[float, float]:
-    """The requirements band [Hz] widened to hold the predicted peaks and the work-piece modes
-    with 25 % to spare, within 1 Hz .. 2 kHz."""
+    """Return the requirements band widened to hold the predicted peaks and work-piece modes.
+
+    Each frequency f widens the band to ``[f / 1.25, 1.25 f]`` at least (25 % to spare); the
+    result is clipped to 1 Hz .. 2 kHz.
+
+    Parameters
+    ----------
+    requirement_band : (float, float)
+        The requirements band [Hz].
+    resonances_hz : sequence of float
+        Predicted peak frequencies [Hz].
+    modes_hz : sequence of float
+        Frequencies [Hz] of the modes carrying work-piece motion.
+
+    Returns
+    -------
+    (float, float)
+        The sweep band [Hz].
+    """
     lo, hi = requirement_band
     for f in list(resonances_hz) + list(modes_hz):
         lo, hi = min(lo, f / 1.25), max(hi, f * 1.25)
@@ -210,8 +271,44 @@ def _wp_modes_hz(axis, band) -> list[float]:
 # ----------------------------------------------------------------------------- simulations
 def simulate_sweep(axis: NonlinearAxis, force_pp: float, band_hz, resonances, speed: float,
                    torque_limit: float | None, tags: dict, max_passes: int = 2) -> Simulation:
-    """One sweep of the verdict (a picklable top-level function for executors): slow where
-    ``resonances`` predict peaks, swept again slowly where an unexpected peak shows."""
+    """Run one sweep of the verdict, slow where peaks are predicted or found.
+
+    A picklable top-level function for executors. The sweep
+    (:func:`servotune.simulate.scenario.sweep_plan`) is slow where ``resonances`` predict
+    peaks; when the envelope's peak lies outside the slow windows, the sweep is run again
+    with a slow window there (at most ``max_passes`` runs). The time step is at most 0.25 ms
+    and 1/16 of the period at the band's top, a divisor of 0.25 ms. A moving axis first runs
+    0.6 s at ``speed``; every sweep ends with 0.3 s without force. The response decays when
+    the peak-to-peak work-piece motion over the last 0.1 s is at most 1.05 times that over
+    the first 0.1 s without force; the peak is at an edge within 3 % of either end of the band.
+
+    Parameters
+    ----------
+    axis : NonlinearAxis
+        The axis with the design and LuGre pads.
+    force_pp : float
+        Peak-to-peak work-piece force [N].
+    band_hz : (float, float)
+        Swept band [Hz].
+    resonances : sequence of (float, float)
+        Predicted peaks ``(frequency [Hz], damping ratio)`` (see
+        :func:`predicted_resonances`).
+    speed : float
+        Feed speed [m/s] during the sweep (0: standing).
+    torque_limit : float or None
+        Peak motor torque [N m]; a run exceeding it reports an error.
+    tags : dict
+        ``regime`` and ``design`` of the :class:`Simulation`.
+    max_passes : int
+        Largest number of runs, >= 1.
+
+    Returns
+    -------
+    Simulation
+        The sweep's peak [m/N], resonance [Hz], pad amplitude [m], largest motor torque,
+        decay and band-edge flags and the envelope; a failed integration gives ``error`` set
+        and ``decays=False``.
+    """
     import time
 
     wall = time.perf_counter()
@@ -340,16 +437,19 @@ def _explain(regime, kind, improvement, active) -> str:
 
 def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
                       speeds=None, simulate_before: bool = True, progress=None) -> Verdict:
-    """The verdict on a tuning result (see the module docstring).
+    """Return the verdict on a tuning result (see the module docstring).
 
     Parameters
     ----------
     axis : Axis
+        The axis description (needs ``[friction]`` and ``[drive]``).
     result : TuningResult
+        The tuning result with its linear checks before and after.
     executor : concurrent.futures.Executor, optional
         Runs the simulations in parallel.
     forces : sequence of float, optional
-        Peak-to-peak forces [N] instead of the process force and its smaller and larger ones.
+        Peak-to-peak forces [N] for every regime instead of the process force and its smaller
+        and larger ones.
     band_hz : (float, float), optional
         The sweep band instead of the one from the axis.
     speeds : sequence of float, optional
@@ -357,7 +457,21 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         must have its regime model in ``result`` (:func:`servotune.design.check_design` with
         ``feed_speeds`` builds them), so that every regime judged has a linear claim.
     simulate_before : bool
-        Also simulate the initial design (for the realised improvement).
+        Also simulate the initial design (for the realised improvement), when its linear
+        models are stable.
+    progress : callable, optional
+        ``progress(done, total)`` after each simulation.
+
+    Returns
+    -------
+    Verdict
+        ``verified`` when the linear check holds (``result.success``) and every regime holds
+        on the nonlinear axis.
+
+    Raises
+    ------
+    ValueError
+        If a speed of ``speeds`` has no feeding regime model in ``result``.
     """
     problem = result.problem
     req = problem.requirements
