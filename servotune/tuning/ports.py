@@ -312,6 +312,16 @@ class ResponseModel:
     of the models are computed once; each call then costs a few vectorised complex operations.
     Results have one row per regime model of the problem (``problem.regimes``).
 
+    Parameters
+    ----------
+    problem : TuningProblem
+        Structure, pads, drive and regime models.
+    omega : array_like
+        Angular frequencies [rad/s] of the grid.
+    exact_delays : bool
+        The digital drive's delays as exact exponentials (True) or their Pade
+        approximations (see :func:`servotune.drive.cascade_response`).
+
     Examples
     --------
     The paper's Fig 5 system at Copt: the peak is g(alpha)/K at the fixed point (Eq 7).
@@ -343,7 +353,29 @@ class ResponseModel:
 
 def evaluate(problem: TuningProblem, design: Design, omega=None,
              exact_delays: bool = True) -> dict:
-    """The port-coupled responses of a design on a grid (numpy), shape (models, frequencies)."""
+    """Return the port-coupled responses of a design on a frequency grid (numpy).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        Structure, pads, drive, regime models and requirements.
+    design : Design
+        The design values (C, and Kv, Kp, Ti with a drive).
+    omega : array_like, optional
+        Angular frequencies [rad/s]; default the union of 2000 log-spaced points over
+        ``problem.requirements.band`` and 2000 over ``problem.requirements.loop_band``.
+    exact_delays : bool
+        The digital drive's delays as exact exponentials (True) or their Pade
+        approximations.
+
+    Returns
+    -------
+    dict
+        ``omega`` [rad/s] and the complex responses of shape (models, frequencies):
+        ``compliance`` (work-piece x/F [m/N]) and, with a drive, ``loop_velocity`` (the
+        velocity loop's transfer with the position loop open) and ``loop_position`` (the
+        position loop's with the velocity loop closed).
+    """
     req = problem.requirements
     if omega is None:
         omega = np.unique(np.concatenate([grid(*req.band, 2000), grid(*req.loop_band, 2000)]))
