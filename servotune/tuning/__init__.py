@@ -11,19 +11,25 @@ Frequency responses in real arithmetic
 casadi has no complex numbers, and rebuilding the closed loop for every trial design would be
 slow, so the responses are written at the *ports* of the structure (work piece, pads, motor,
 encoder). With R(jw) the structure's receptance between the ports (modal sum, computed once),
-viscous pads z = (k + j w C)/n couple in closed form,
+pads of impedance z = (Z_0(jw) + j w C)/n (Z_0 the regime model's contact without its viscous
+part, n the number of pads) couple in closed form::
 
-    R_c = R - z R_:p (I + z R_pp)^-1 R_p:  =  R - z sum_i a_i b_i^T / (1 + z lambda_i),
+    R_c = R - z R[:, p] (I + z R[p, p])^-1 R[p, :]  =  R - z sum_i a_i b_i^T / (1 + z lambda_i),
 
-with the eigen-decomposition R_pp = U diag(lambda) U^-1 done once per frequency. The drive then
-closes around the scalar port receptances (torque port e = rotor - stator, feedback port f):
+with the eigen-decomposition R[p, p] = U diag(lambda) U^-1 done once per frequency. The drive
+then closes around the scalar port receptances (torque port e = rotor - stator, feedback port
+f)::
 
     P_phi = e^T R_c e,  P_fb = f^T R_c e,  a = C_i F C_v,  b = kt ke,  den = j w L + R + C_i
-    L_v   = a j w P_phi / (den + b j w P_phi)                        (position loop open)
-    L_p   = (Kv/r) a P_fb / (den + (a + b) j w P_phi)                (velocity loop closed)
-    T/F   = -(a (Kv/r) R_c[f, wp] + (a + b) j w R_c[e, wp]) / (den + a (Kv/r) P_fb
-            + (a + b) j w P_phi)
+    L_v   = a M_v j w P_phi / (den + b j w P_phi)                    (position loop open)
+    L_p   = (Kv/r) D_p a P_fb / (den + (a M_v + b) j w P_phi)        (velocity loop closed)
+    T/F   = -(a (Kv/r) D_p R_c[f, wp] + (a M_v + b) j w R_c[e, wp])
+            / (den + a (Kv/r) D_p P_fb + (a M_v + b) j w P_phi)
     x/F   = R_c[wp, wp] + R_c[wp, e] T/F
+
+with the digital drive's delays in C_i (current loop), F (velocity controller), M_v (speed
+measurement and its filter) and D_p (position controller), all 1 in continuous time
+(:func:`servotune.drive.cascade_response`).
 
 Each complex quantity is carried as a (real, imaginary) pair of casadi expressions, so IPOPT
 gets exact derivatives. The expressions are written once for ONE frequency, with the port data
