@@ -5,6 +5,7 @@ import json
 import math
 from pathlib import Path
 
+import control
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -12,7 +13,7 @@ from numpy.testing import assert_allclose
 from servotune import analysis
 from servotune.axis import load_axis
 from servotune.cli import main
-from servotune.plant import Contact
+from servotune.plant import Contact, loop_transfer
 from servotune.units import HZ_PER_RAD_S
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
@@ -26,7 +27,12 @@ def axis():
 
 def test_bundled_drive_reproduces_table3_resonances(axis):
     # Table 3: LuGre at standstill resonates at 57 Hz (pads stuck), viscous-only at 32 Hz,
-    # both with a work-piece oscillation of about 6e-5 mm/N = 6e-8 m/N
+    # both with a work-piece oscillation of about 6e-5 mm/N = 6e-8 m/N. NOTE: these are the
+    # targets the bundled model was calibrated to (models/paper_x_axis/calibration.json:
+    # work-piece mass, fixture and drive-train stiffness fitted to 57 Hz pads locked, 32 Hz
+    # rotor held, 6e-8 m/N; the velocity gain kp = 35 chosen for the 32 Hz viscous row), so
+    # this checks that the calibration still holds, not the physics: the independent
+    # references are in the two tests that follow.
     omega = analysis.default_omega(5.0, 300.0, 3000)
     locked = analysis.compliance_curve(axis, Contact.locked(), omega=omega)
     viscous = analysis.compliance_curve(axis, analysis.axis_contact(axis, "viscous"),
@@ -35,6 +41,20 @@ def test_bundled_drive_reproduces_table3_resonances(axis):
     assert viscous.peak_frequency * HZ_PER_RAD_S == pytest.approx(32.0, abs=1.5)
     for curve in (locked, viscous):
         assert 4e-8 < curve.peak_compliance < 9e-8
+
+
+def test_locked_pads_peak_is_the_damped_work_piece_mode_of_the_held_structure(axis):
+    # second method: the eigen-solution of the structure with the pads held. Its work-piece
+    # mode (the one with the largest share of the wp.x static compliance) of natural frequency
+    # wn and damping zeta peaks at wn sqrt(1 - 2 zeta^2) (a single mode's receptance); the
+    # closed drive barely moves it (the held slide decouples the motor from the work piece)
+    held = axis.structure.locked(list(axis.pads))
+    j = int(np.argmax(held.participation("wp.x")))
+    wn, zeta = held.natural_frequencies()[j], held.modal_damping_ratios()[j]
+    assert held.participation("wp.x")[j] > 0.9  # a single-mode peak
+    locked = analysis.compliance_curve(axis, Contact.locked(),
+                                       omega=analysis.default_omega(40.0, 80.0, 4000))
+    assert locked.peak_frequency == pytest.approx(wn * math.sqrt(1 - 2 * zeta**2), rel=5e-3)
 
 
 def test_stiction_linearisation_is_close_to_locked_pads(axis):
@@ -63,32 +83,65 @@ def test_loops_of_the_bundled_drive_are_stable_with_margins(axis):
     assert 1.0 < loops.position.ms < 3.0
 
 
-def test_bode_command_json(tmp_path, capsys):
+def test_bode_command_margins_equal_python_control_margins(tmp_path, capsys, axis):
+    # second method: python-control's own frequency response of the loop transfer functions
+    # (its general state-space evaluation, not servotune's modal one) and its
+    # stability_margins; Ms = 1 / min |1 + L| on that response
     assert main(["bode", str(MODELS / "paper_x_axis"), "--continuous", "--out", str(tmp_path),
                  "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    for loop in ("velocity_loop", "position_loop"):
-        for key in ("phase_margin_deg", "gain_margin_db", "ms", "bandwidth_hz"):
-            assert key in out[loop]
-    assert out["kv_m_per_min_per_mm"] == pytest.approx(1.0)
-    assert Path(out["figures"][0]).stat().st_size > 10_000
+    contact = analysis.axis_contact(axis, "viscous")  # the command's default contact
+    omega = 2 * np.pi * np.geomspace(0.1, 3000.0, 3000)
+    for loop in ("velocity", "position"):
+        lt = loop_transfer(axis.structure, axis.drive, contact, axis.pads, loop)
+        l_jw = control.frequency_response(lt, omega).complex.reshape(-1)
+        gm, pm, _, wpc, wgc, _ = control.stability_margins(
+            (np.abs(l_jw), np.degrees(np.unwrap(np.angle(l_jw))), omega))
+        got = out[f"{loop}_loop"]
+        assert got["phase_margin_deg"] == pytest.approx(pm, abs=0.05)
+        assert got["crossover_hz"] == pytest.approx(wgc * HZ_PER_RAD_S, rel=1e-3)
+        assert got["ms"] == pytest.approx(1.0 / np.abs(1.0 + l_jw).min(), rel=1e-3)
+        if math.isfinite(gm):
+            assert got["gain_margin"] == pytest.approx(gm, rel=1e-3)
+            assert got["phase_crossover_hz"] == pytest.approx(wpc * HZ_PER_RAD_S, rel=1e-3)
+        else:
+            assert got["gain_margin"] is None and got["phase_crossover_hz"] is None
+    # the position loop crosses over near Kv for a fast velocity loop: Kv = 1 (m/min)/mm
+    assert out["position_loop"]["crossover_hz"] == pytest.approx(
+        1000.0 / 60.0 * HZ_PER_RAD_S, rel=0.05)
 
 
-def test_compliance_command_json_and_contacts(tmp_path, capsys):
+def test_compliance_command_fig9_equals_the_direct_receptance(tmp_path, capsys, axis):
+    # second method for the uncontrolled curves of Fig 9: the structure with a grounded
+    # damper C/n at each of the n pads, solved directly, (K - w^2 M + j w D) x = f, on a fine
+    # grid over the requirement band; the locked contact against the held structure's
+    # work-piece mode (see above)
     assert main(["compliance", str(MODELS / "paper_x_axis"), "--contact", "locked",
-                 "--continuous", "--out", str(tmp_path), "--json"]) == 0
+                 "--continuous", "--out", str(tmp_path), "--json", "--no-plots"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["peak_frequency_hz"] == pytest.approx(57.0, abs=1.0)
-    assert len(out["fig9"]) == 5 and out["peak_compliance"] > 0
+    lo, hi = axis.requirements.band
+    omega = np.geomspace(lo, hi, 20000)
+    pads = list(axis.pads)
+    assert [row["c"] for row in out["fig9"]] == [5e3, 5e4, 5e5, 5e6, 5e7]  # the paper's Fig 9
+    for row in out["fig9"]:
+        damped = axis.structure.with_added(damping={p: row["c"] / len(pads) for p in pads})
+        ref = np.abs(damped.receptance(omega, ["wp.x"], ["wp.x"])[:, 0, 0])
+        i = int(np.argmax(ref))
+        # the command's grid starts 0.06 % above 5 Hz, where a 1/w^2 edge peak is 0.12 % lower
+        assert row["peak_compliance"] == pytest.approx(ref[i], rel=2e-3)
+        assert row["peak_frequency_hz"] == pytest.approx(omega[i] * HZ_PER_RAD_S, rel=2e-3)
+    held = axis.structure.locked(pads)
+    j = int(np.argmax(held.participation("wp.x")))
+    wn, zeta = held.natural_frequencies()[j], held.modal_damping_ratios()[j]
+    assert out["peak_frequency_hz"] == pytest.approx(
+        wn * math.sqrt(1 - 2 * zeta**2) * HZ_PER_RAD_S, rel=5e-3)
+
+
+def test_compliance_command_needs_the_describing_function_amplitude(tmp_path, capsys):
     # the describing-function contact needs its amplitude and frequency
     assert main(["compliance", str(MODELS / "paper_x_axis"), "--contact", "equivalent",
                  "--continuous", "--out", str(tmp_path), "--force"]) == 1
-    assert "amplitude" in capsys.readouterr().err
-    assert main(["compliance", str(MODELS / "paper_x_axis"), "--contact", "equivalent",
-                 "--amplitude", "2e-6", "--frequency-hz", "57", "--out", str(tmp_path),
-                 "--continuous", "--force", "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
-    assert "describing function" in out["contact_note"]
+    assert "--amplitude" in capsys.readouterr().err
 
 
 def test_two_mass_compliance_without_drive(tmp_path, capsys):
