@@ -64,7 +64,7 @@ NOT_YET_CHECKED = (
     "servotune.analysis", "servotune.axis", "servotune.cli.nlcompliance",
     "servotune.contact_kinds", "servotune.frequency", "servotune.friction", "servotune.harmonic",
     "servotune.plant", "servotune.simulate", "servotune.tuning.nlp", "servotune.tuning.problem",
-    "servotune.tuning.solve", "servotune.tuning.verify",
+    "servotune.tuning.solve",
 )
 
 #: The entry points a reader starts from: See Also required, linking to one another.

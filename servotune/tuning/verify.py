@@ -33,7 +33,25 @@ CHECK_TOLERANCE = {"ms": 0.005, "ratio": 0.02}
 
 @dataclass(frozen=True)
 class ModelPerformance:
-    """What a design achieves with one regime model (SI; None where it does not apply)."""
+    """What a design achieves with one regime model (SI; None where it does not apply).
+
+    Parameters
+    ----------
+    model : RegimeModel
+        The regime model.
+    stable : bool
+        Whether the closed loop (and, with a drive, both loops) is stable.
+    peak_compliance : float, optional
+        Peak work-piece compliance [m/N] over the requirements band (cutting models).
+    peak_frequency : float, optional
+        Its angular frequency [rad/s].
+    b_crit : float, optional
+        Critical depth of cut [m] (with a chatter target).
+    velocity, position : servotune.frequency.LoopAnalysis, optional
+        The velocity loop (position loop open) and the position loop (velocity loop closed).
+    reason : str
+        Why the model is unstable.
+    """
 
     model: RegimeModel
     stable: bool
@@ -45,6 +63,14 @@ class ModelPerformance:
     reason: str = ""
 
     def to_dict(self) -> dict:
+        """Return the model's performance as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The model's own data (:meth:`RegimeModel.to_dict`), stability and reason, peak
+            [m/N] and its frequency [Hz], ``b_crit_m`` and both loops.
+        """
         return {**self.model.to_dict(), "stable": self.stable, "reason": self.reason or None,
                 "peak_compliance": self.peak_compliance,
                 "peak_frequency_hz": None if self.peak_frequency is None
@@ -59,8 +85,18 @@ class Performance:
     """What a design achieves over every regime model.
 
     ``peak_compliance`` is the worst over the cutting models (inf when one is unstable),
-    ``b_crit`` the smallest; ``velocity`` and ``position`` are the loops of the reference
-    model (the first moving one, where loop bandwidths mean something, else the first).
+    ``b_crit`` the smallest (0 when a cutting model is unstable); ``velocity`` and
+    ``position`` are the loops of the reference model (the first moving one, where loop
+    bandwidths mean something, else the first).
+
+    Parameters
+    ----------
+    models : tuple of ModelPerformance
+        One per regime model, in the order of ``problem.regimes``.
+    reference : int
+        Index of the reference model.
+    notes : tuple of str
+        Remarks shown with the results.
     """
 
     models: tuple[ModelPerformance, ...]
@@ -109,6 +145,14 @@ class Performance:
         return self.models[self.reference].position
 
     def to_dict(self) -> dict:
+        """Return the performance as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The worst peak [m/N] and its frequency [Hz], ``b_crit_m``, stability, the
+            reference model's name and loops, and every model's performance.
+        """
         return {"peak_compliance": self.peak_compliance,
                 "peak_frequency_hz": self.peak_frequency * HZ_PER_RAD_S,
                 "b_crit_m": self.b_crit, "stable": self.stable,
@@ -126,8 +170,33 @@ def _offset_grid(lo: float, hi: float, n: int) -> np.ndarray:
 
 
 def verify(problem: TuningProblem, design: Design) -> Performance:
-    """Performance of a design in every regime model, from the python-control state space on
-    dense grids that the optimiser never uses; an unstable model is reported, not raised."""
+    """Return the performance of a design in every regime model, on dense grids.
+
+    For each regime model the closed loop is built as a python-control state space
+    (:func:`servotune.plant.build_plant`, the digital drive's delays as Pade blocks) and its
+    poles tested; a stable cutting model gets its compliance peak on 6001 log-spaced points
+    over the requirements band and, with a chatter target, its critical depth; with a drive,
+    both loops are analysed on 8001 points over the loop band. The grids are offset by a third
+    of a step from any grid the optimiser builds. An unstable model is reported, not raised.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        Structure, pads, drive, regime models, requirements and chatter target.
+    design : Design
+        The design to check.
+
+    Returns
+    -------
+    Performance
+        One :class:`ModelPerformance` per regime model; the reference model is the first
+        moving one (else the first).
+
+    See Also
+    --------
+    servotune.tuning.solve.tune : the optimisation whose result this checks.
+    servotune.design.tune_axis : the design job that runs both on an axis.
+    """
     req = problem.requirements
     drive = problem.drive_for(design)
     band = _offset_grid(*req.band, 6001)
@@ -171,7 +240,22 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
 
 @dataclass(frozen=True)
 class RequirementCheck:
-    """One requirement judged on the dense check of one model (or of the axis)."""
+    """One requirement judged on the dense check of one model (or of the axis).
+
+    Parameters
+    ----------
+    requirement : str
+        The requirement (``"stability"``, ``"Ms velocity loop"``, ``"loop hierarchy"``,
+        ``"thrust"``, ``"kv_min"``, ...).
+    model : str or None
+        The regime model's name (the thrust case for ``"thrust"``); None for the axis.
+    value, limit : float or None
+        The value reached and the limit it is judged against.
+    holds : bool
+        Whether the requirement holds.
+    text : str
+        One line for the reader.
+    """
 
     requirement: str
     model: str | None
@@ -181,13 +265,43 @@ class RequirementCheck:
     text: str
 
     def to_dict(self) -> dict:
+        """Return the check as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The fields by name.
+        """
         return {"requirement": self.requirement, "model": self.model, "value": self.value,
                 "limit": self.limit, "holds": self.holds, "text": self.text}
 
 
 def requirement_checks(problem: TuningProblem, design: Design, performance: Performance,
                        current_bandwidth: float | None) -> tuple[RequirementCheck, ...]:
-    """Every requirement of the problem judged on a verified performance."""
+    """Return every requirement of the problem judged on a verified performance.
+
+    Per model: stability, and the Ms of each loop against :meth:`Requirements.ms_limit`
+    (0.5 % slack, :data:`CHECK_TOLERANCE`). Per moving model with a velocity loop: the
+    velocity over position bandwidth ratio, Ti times the velocity bandwidth within its range,
+    and the current over velocity bandwidth ratio, each with 2 % slack. Then each thrust case
+    of the thrust budget at the design's C, and Kv against ``kv_min``.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        Requirements, regime models and thrust budget.
+    design : Design
+        The design judged.
+    performance : Performance
+        Its dense check (:func:`verify`).
+    current_bandwidth : float or None
+        Closed-loop bandwidth of the current loop [rad/s] (None: not judged).
+
+    Returns
+    -------
+    tuple of RequirementCheck
+        The checks, model by model, then thrust and Kv.
+    """
     req = problem.requirements
     out = []
     moving = set(problem.moving_models)
