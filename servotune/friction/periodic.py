@@ -43,12 +43,25 @@ __all__ = ["lugre_periodic_force", "lugre_periodic_state", "lugre_periodic_jacob
 
 
 @numba.njit(cache=True)
+def _stribeck(au, fc, fs, vs, delta):
+    """g(|u|) and dg/d|u| (one exponential; no power for delta = 1)."""
+    x = au / vs
+    if delta == 1.0:
+        e = math.exp(-x)
+        return fc + (fs - fc) * e, -(fs - fc) * e / vs
+    xd = x ** delta
+    e = math.exp(-xd)
+    slope = -(fs - fc) * delta * xd / au * e if au > 0.0 else 0.0
+    return fc + (fs - fc) * e, slope
+
+
+@numba.njit(cache=True)
 def _rate(u, sigma0, fc, fs, vs, delta):
     """a(u) = sigma0 |u| / g(u) [1/s]."""
     au = abs(u)
     if au == 0.0:
         return 0.0
-    g = fc + (fs - fc) * math.exp(-((au / vs) ** delta))
+    g, _ = _stribeck(au, fc, fs, vs, delta)
     return sigma0 * au / g
 
 
@@ -90,16 +103,14 @@ def _periodic_orbit(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z, forc
 
 
 @numba.njit(cache=True)
-def _rate_slope(u, sigma0, fc, fs, vs, delta):
-    """da/du of a(u) = sigma0 |u| / g(u) (0 at u = 0, where |u| has no derivative)."""
+def _rate_and_slope(u, sigma0, fc, fs, vs, delta):
+    """a(u) = sigma0 |u| / g(u) and da/du (0 at u = 0, where |u| has no derivative)."""
     au = abs(u)
     if au == 0.0:
-        return 0.0
-    e = math.exp(-((au / vs) ** delta))
-    g = fc + (fs - fc) * e
-    dg = -(fs - fc) * delta * (au / vs) ** (delta - 1.0) / vs * e      # dg/d|u|
+        return 0.0, 0.0
+    g, dg = _stribeck(au, fc, fs, vs, delta)
     sgn = 1.0 if u > 0.0 else -1.0
-    return sigma0 * sgn * (1.0 / g - au * dg / (g * g))
+    return sigma0 * au / g, sigma0 * sgn * (1.0 / g - au * dg / (g * g))
 
 
 @numba.njit(cache=True)
@@ -116,7 +127,7 @@ def _periodic_jacobian(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basi
     total = 0.0
     for i in range(n):
         u = 0.5 * (v[i] + v[(i + 1) % n])
-        a = _rate(u, sigma0, fc, fs, vs, delta)
+        a, da = _rate_and_slope(u, sigma0, fc, fs, vs, delta)
         ah = a * h
         total += ah
         e_step[i] = math.exp(-ah)
@@ -127,7 +138,6 @@ def _periodic_jacobian(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basi
             phi = -math.expm1(-ah) / a
             dphi = (h * e_step[i] - phi) / a
         b_step[i] = u * phi
-        da = _rate_slope(u, sigma0, fc, fs, vs, delta)
         c_step[i] = phi + u * dphi * da          # db/du; dE/du z_i is added below
         de_step[i] = -h * da * e_step[i]         # dE/du
     one_minus_phi = -math.expm1(-total)
@@ -157,8 +167,7 @@ def _periodic_jacobian(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basi
             tail *= e_step[j]
     for i in range(n):
         vi = v[i]
-        a = _rate(vi, sigma0, fc, fs, vs, delta)
-        da = _rate_slope(vi, sigma0, fc, fs, vs, delta)
+        a, da = _rate_and_slope(vi, sigma0, fc, fs, vs, delta)
         damp = sigma1
         ddamp = 0.0
         if vd > 0.0:

@@ -67,8 +67,8 @@ class HarmonicSettings:
     harmonics : int
         H, the highest harmonic kept (1 is the describing-function approximation).
     samples : int, optional
-        N, the instants per period of AFT (default: the power of 2 at least 16 H, so that the
-        friction force's higher harmonics alias little onto the kept ones).
+        N, the instants per period of AFT (default: the power of 2 at least 12 H and 32, 128 for
+        H = 9, so that the friction force's higher harmonics alias little onto the kept ones).
     tolerance : float
         Newton stops when the residual of (1) is below ``tolerance`` times the size of the
         pad response (relative).
@@ -87,7 +87,7 @@ class HarmonicSettings:
             raise ValueError(f"harmonics must be a whole number >= 1, got {self.harmonics!r}")
         n = self.samples
         if n is None:
-            n = 1 << max(5, math.ceil(math.log2(16 * h)))
+            n = 1 << max(5, math.ceil(math.log2(12 * h)))
         if int(n) != n or n <= 2 * h:
             raise ValueError(f"samples must be a whole number > 2 harmonics ({2 * h}), got {n!r}")
         object.__setattr__(self, "samples", int(n))

@@ -333,7 +333,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     band : (float, float)
         Frequency band [rad/s] (default 10-100 Hz, the paper's sweep).
     settings : HarmonicSettings, optional
-        Harmonics, AFT samples, tolerance (default 9 harmonics, 256 samples).
+        Harmonics, AFT samples, tolerance (default 9 harmonics, 128 samples).
     continuation : ContinuationSettings, optional
         Step control of the continuation.
     law : object, optional
