@@ -3,6 +3,7 @@ interruption, start-up and the listed small fixes."""
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -10,23 +11,35 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from servotune import twomass
 from servotune.cli import COMMANDS, SUMMARIES, build_parser, main
 from servotune.cli._common import RunOutput, print_json, to_jsonable
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
-def test_twomass_json_has_the_keys_and_values(tmp_path, capsys):
+M1, K, ALPHA = 5000.0, 16e6, 0.3  # the paper's Fig 5 (sec 4.1); M2 = alpha M1
+M2 = ALPHA * M1
+
+
+def test_twomass_json_matches_the_closed_forms_of_layout_b(tmp_path, capsys):
+    # ground --C-- M1 --K-- M2 (PAPER_NOTES sec 3): fixed points
+    # w0 sqrt((1 + a -/+ sqrt(1 + a^2)) / (2 a)), Copt = sqrt(K M1) f(a), peak g(a)/K at the
+    # second fixed point; the resonance is the free pair for C = 0, M2 on K for C -> inf
     assert main(["twomass", "--m1", "5000", "--k", "16e6", "--alpha", "0.3",
                  "--out", str(tmp_path), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    for key in ("fixed_points_hz", "c_opt", "peak_compliance", "peak_frequency_hz",
-                "resonance_c0_hz", "resonance_cinf_hz"):
-        assert key in result
-    np.testing.assert_allclose(result["c_opt"], 4.912e5, rtol=1e-4)
-    np.testing.assert_allclose(result["peak_compliance"], twomass.g_alpha(0.3) / 16e6)
-    assert len(result["fixed_points_hz"]) == 2
+    a, root, w0 = ALPHA, math.sqrt(1 + ALPHA**2), math.sqrt(K / M1)
+    fixed = [w0 * math.sqrt((1 + a - root) / (2 * a)), w0 * math.sqrt((1 + a + root) / (2 * a))]
+    hz = 1.0 / (2 * math.pi)
+    np.testing.assert_allclose(result["fixed_points_hz"], np.array(fixed) * hz, rtol=1e-12)
+    np.testing.assert_allclose(result["c_opt"], math.sqrt(K * M1) * math.sqrt(
+        (3 * root + a - 1) / (2 * a * (a + root))), rtol=1e-10)
+    np.testing.assert_allclose(result["c_opt"], 4.912e5, rtol=1e-4)  # the paper's value
+    np.testing.assert_allclose(result["peak_compliance"], (1 - a + root) / a / K, rtol=1e-10)
+    np.testing.assert_allclose(result["peak_frequency_hz"], fixed[1] * hz, rtol=1e-10)
+    np.testing.assert_allclose(result["resonance_c0_hz"],
+                               math.sqrt(K * (M1 + M2) / (M1 * M2)) * hz, rtol=1e-12)
+    np.testing.assert_allclose(result["resonance_cinf_hz"], math.sqrt(K / M2) * hz, rtol=1e-12)
     folder = tmp_path / "twomass_layout_B"
     assert result["folder"] == str(folder)
     assert [Path(f).name for f in result["figures"]] == ["fig5_compliance.png",
@@ -36,12 +49,31 @@ def test_twomass_json_has_the_keys_and_values(tmp_path, capsys):
     assert json.loads((folder / "results.json").read_text()) == result
 
 
-def test_twomass_text_and_layout_a_without_plots(tmp_path, capsys):
-    assert main(["twomass", "--layout", "A", "--no-plots", "--out", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
-    assert "Copt" in out and "layout A" in out
+def test_twomass_layout_a_matches_its_closed_forms_without_plots(tmp_path, capsys):
+    # ground --K-- M2 --C-- M1 (a Lanchester damper, PAPER_NOTES sec 3): one fixed point
+    # w^2 = 2 K / (M1 + 2 M2), Copt = sqrt(K M2) sqrt(2 / ((1 + a)(1 + 2 a))); |H| there is the
+    # same for every C, so the C -> inf value 1 / |K - (M1 + M2) w^2|; the resonance is M2 on K
+    # for C = 0 and M1 + M2 on K for C -> inf
+    assert main(["twomass", "--layout", "A", "--no-plots", "--out", str(tmp_path),
+                 "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    a, hz = ALPHA, 1.0 / (2 * math.pi)
+    wf = math.sqrt(2 * K / (M1 + 2 * M2))
+    np.testing.assert_allclose(result["fixed_points_hz"], [wf * hz], rtol=1e-12)
+    np.testing.assert_allclose(result["c_opt"], math.sqrt(K * M2) * math.sqrt(
+        2 / ((1 + a) * (1 + 2 * a))), rtol=1e-10)
+    np.testing.assert_allclose(result["peak_compliance"], 1 / abs(K - (M1 + M2) * wf**2),
+                               rtol=1e-10)
+    np.testing.assert_allclose(result["resonance_c0_hz"], math.sqrt(K / M2) * hz, rtol=1e-12)
+    np.testing.assert_allclose(result["resonance_cinf_hz"], math.sqrt(K / (M1 + M2)) * hz,
+                               rtol=1e-12)
     assert sorted(p.name for p in (tmp_path / "twomass_layout_A").iterdir()) == [
         ".servotune-run.json", "results.json"]
+    assert main(["twomass", "--layout", "A", "--no-plots", "--out", str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    assert "layout A" in text
+    printed = re.search(r"Copt\s*:\s*(\S+) N s/m", text)
+    assert printed and float(printed.group(1)) == pytest.approx(result["c_opt"], rel=1e-4)
 
 
 # --------------------------------------------------------------------------- output policy
@@ -208,6 +240,9 @@ def test_modes_band_is_printed_in_hz(tmp_path, capsys):
 
     band = load_axis(MODELS / "two_mass_fig5").requirements.band
     np.testing.assert_allclose([low, high], np.array(band) / (2 * math.pi))
+    # with the pad (M1) locked, M2 rings on K alone: one mode at sqrt(K / M2)
+    np.testing.assert_allclose(result["frequencies_hz"], [math.sqrt(K / M2) / (2 * math.pi)],
+                               rtol=1e-12)
 
 
 def test_init_names_the_axis_after_its_folder(tmp_path, capsys):
