@@ -142,5 +142,6 @@ def test_csv_reading_accepts_si_and_edge_units(tmp_path):
         identify.read_friction_csv(bad)
     nan = tmp_path / "nan.csv"
     nan.write_text("v_m_per_s,f_n\n1,abc\n")
-    with pytest.raises(ValueError, match="non-number"):
+    with pytest.raises(ValueError,
+                       match=r"nan\.csv, line 2: column 'f_n' holds 'abc', not a number"):
         identify.read_friction_csv(nan)

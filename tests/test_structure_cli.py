@@ -69,9 +69,10 @@ def test_check_text_report_names_the_failure(star_files, capsys):
 
 
 @pytest.fixture
-def table_axis(tmp_path):
+def table_axis(tmp_path, monkeypatch):
     folder = tmp_path / "table_axis"
     shutil.copytree(TABLE_AXIS, folder)
+    monkeypatch.chdir(tmp_path)   # the commands' default out/ folders go there
     return folder
 
 

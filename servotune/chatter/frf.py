@@ -22,14 +22,13 @@ the ``servotune lobes --mode`` command.
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import control
 import numpy as np
 
+from ..tablefile import read_table
 from .setup import DIRECTIONS, _direction_index
 
 __all__ = [
@@ -369,42 +368,35 @@ def read_frf_csv(path) -> control.FrequencyResponseData:
 
     Raises
     ------
-    ValueError
-        Naming the missing or unexpected columns, or the bad rows.
-    FileNotFoundError
-        If the file does not exist.
+    servotune.tablefile.TableFileError
+        When the file cannot be read, or naming the missing or unexpected columns, or the
+        line of a bad value.
     """
-    path = Path(path)
-    with path.open(newline="") as handle:
-        rows = [r for r in csv.reader(handle) if r and not r[0].lstrip().startswith("#")]
-    if len(rows) < 4:
-        raise ValueError(f"{path}: need a header line and at least 3 frequencies")
-    header = [h.strip().lower() for h in rows[0]]
+    table = read_table(path, "measured FRF", min_rows=3,
+                       hint="f_hz and re_ij_m_per_n, im_ij_m_per_n for ij in xx, xy, yx, yy")
+    header = table.header
     expected = {"f_hz"} | {f"{p}_{t}_m_per_n" for t in FRF_CSV_TERMS for p in ("re", "im")}
     unknown = sorted(set(header) - expected)
     if unknown:
-        raise ValueError(f"{path}: unknown columns {unknown}; expected f_hz and "
-                         "re_ij_m_per_n, im_ij_m_per_n for ij in xx, xy, yx, yy")
-    if "f_hz" not in header:
-        raise ValueError(f"{path}: the column f_hz (frequency in Hz) is missing")
-    try:
-        data = np.array([[float(v) for v in r] for r in rows[1:]])
-    except ValueError as exc:
-        raise ValueError(f"{path}: a value is not a number ({exc})") from None
-    if data.shape[1] != len(header):
-        raise ValueError(f"{path}: every row must have {len(header)} values")
-    col = {name: data[:, i] for i, name in enumerate(header)}
+        raise table.error(f"unknown columns {unknown}; expected f_hz and "
+                          "re_ij_m_per_n, im_ij_m_per_n for ij in xx, xy, yx, yy")
+    table.require("f_hz", hint="the frequency in Hz")
+    for i, r in enumerate(table.rows):
+        if len(r) != len(header):
+            raise table.error(f"every row must have {len(header)} values, this one has "
+                              f"{len(r)}", i)
+    col = {name: table.numbers(name) for name in header}
     present = []
     for term in FRF_CSV_TERMS:
         pair = [f"re_{term}_m_per_n" in col, f"im_{term}_m_per_n" in col]
         if any(pair) and not all(pair):
-            raise ValueError(f"{path}: give both re_{term}_m_per_n and im_{term}_m_per_n")
+            raise table.error(f"give both re_{term}_m_per_n and im_{term}_m_per_n")
         if all(pair):
             present.append(term)
     if not {"xx", "yy"} & set(present):
-        raise ValueError(f"{path}: need at least the direct term xx or yy")
+        raise table.error("need at least the direct term xx or yy")
     if ("xy" in present) != ("yx" in present):
-        raise ValueError(f"{path}: give both cross terms xy and yx, or neither")
+        raise table.error("give both cross terms xy and yx, or neither")
     omega = _check_omega(2.0 * math.pi * col["f_hz"])
     response = np.zeros((2, 2, omega.size), dtype=complex)
     for term in present:

@@ -30,17 +30,16 @@ compensation methods for the control of machines with friction", Automatica 30(7
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
 import types
 from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from scipy import optimize
 
+from ..tablefile import read_table
 from .lugre import LuGreParameters, simulate_lugre
 
 __all__ = [
@@ -145,41 +144,42 @@ _COLUMNS = {
 def read_friction_csv(path) -> FrictionData:
     """Read steady-state (v, F) or presliding (t, x, F) data from a CSV file with a header.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file (lines starting with ``#`` are comments).
+
+    Returns
+    -------
+    FrictionData
+        The force [N] with the velocity [m/s], or with time [s] and displacement [m] (each
+        column converted from the unit its name gives).
+
     Raises
     ------
-    ValueError
-        If the header names no known force column, neither a velocity nor time + displacement
-        columns, or a value is not a finite number.
+    servotune.tablefile.TableFileError
+        If the file cannot be read, the header names no known force column, neither a
+        velocity nor time + displacement columns, or a value is not a finite number (naming
+        its line).
     """
-    path = Path(path)
-    with path.open(newline="") as handle:
-        rows = [row for row in csv.reader(handle) if row and not row[0].lstrip().startswith("#")]
-    if len(rows) < 2:
-        raise ValueError(f"{path}: expected a header row and data rows")
-    header = [h.strip().lower() for h in rows[0]]
+    table = read_table(path, "friction data",
+                       hint="v_m_per_s,f_n (steady state) or t_s,x_m,f_n (presliding)")
     found: dict[str, np.ndarray] = {}
     for quantity, names in _COLUMNS.items():
-        for j, name in enumerate(header):
+        for name in table.header:
             if name in names:
-                try:
-                    col = np.array([float(r[j]) for r in rows[1:]])
-                except (ValueError, IndexError) as exc:
-                    raise ValueError(f"{path}: column {name!r} holds a non-number ({exc})") \
-                        from exc
-                if not np.all(np.isfinite(col)):
-                    raise ValueError(f"{path}: column {name!r} holds non-finite values")
-                found[quantity] = col * names[name]
+                found[quantity] = table.numbers(name) * names[name]
                 break
     expected = "expected columns v_m_per_s,f_n (steady state) or t_s,x_m,f_n (presliding)"
     if "force" not in found:
-        raise ValueError(f"{path}: no force column in header {rows[0]}; {expected}")
+        raise table.error(f"no force column in the header {list(table.header)}; {expected}")
     if "velocity" in found:
         return FrictionData(force=found["force"], velocity=found["velocity"])
     if "t" in found and "displacement" in found:
         return FrictionData(force=found["force"], t=found["t"],
                             displacement=found["displacement"])
-    raise ValueError(f"{path}: header {rows[0]} names neither a velocity nor time and "
-                     f"displacement; {expected}")
+    raise table.error(f"the header {list(table.header)} names neither a velocity nor time "
+                      f"and displacement; {expected}")
 
 
 def _covariance(jac: np.ndarray, residuals: np.ndarray, names, what: str) -> np.ndarray:

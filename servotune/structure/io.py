@@ -40,7 +40,6 @@ MSC Nastran DMAP Programmer's Guide, OUTPUT4 module (the op4 format); T. P. Widr
 
 from __future__ import annotations
 
-import csv
 import io
 import os
 import re
@@ -53,6 +52,7 @@ import scipy.io
 import scipy.sparse
 import scipy.sparse.linalg
 
+from ..tablefile import TableFileError, read_table
 from .model import ModalModel, UnknownDofError
 from .ports import PortError, name_ports, normalise_node
 
@@ -77,7 +77,7 @@ _STIFFNESS_NAMES = ("stiffness", "k", "stiffness_matrix", "kaa", "kgg", "kff", "
 _BOTH = (".npz", ".mat", ".op4")  # files that may hold both matrices
 
 
-class MatrixFileError(ValueError):
+class MatrixFileError(TableFileError):
     """A matrix or DOF-map file that cannot be used; the message names the file and the fix."""
 
 
@@ -346,29 +346,22 @@ def read_dof_map(path) -> tuple[str, ...]:
         When the file cannot be read or is empty, lacks the columns, has a bad ``index``, an
         empty or a duplicate name.
     """
-    path = Path(path)
-    try:
-        with open(path, newline="") as handle:
-            rows = list(csv.DictReader(handle))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise MatrixFileError(f"{path}: cannot read the DOF map ({exc})") from None
-    if not rows:
-        raise MatrixFileError(f"{path}: the DOF map is empty (a header row, then one row per "
-                              "DOF)")
-    cols = {c.strip().lower(): c for c in rows[0] if c is not None}
-    if "name" in cols:
-        names = [r[cols["name"]].strip() for r in rows]
-    elif "node" in cols and "dof" in cols:
-        names = [f"{normalise_node(r[cols['node']])}.{r[cols['dof']].strip().lower()}"
-                 for r in rows]
+    table = read_table(path, "DOF map", hint="a header row, then one row per DOF",
+                       error=MatrixFileError)
+    path = table.path
+    if table.has("name"):
+        names = table.text("name")
+    elif table.has("node", "dof"):
+        names = [f"{normalise_node(n)}.{d.lower()}"
+                 for n, d in zip(table.text("node"), table.text("dof"), strict=True)]
     else:
-        raise MatrixFileError(f"{path}: the DOF map needs a 'name' column or 'node' and 'dof' "
-                              f"columns, found {list(cols)}")
-    if "index" in cols:
+        raise table.error("the DOF map needs a 'name' column or 'node' and 'dof' columns, "
+                          f"found {list(table.header)}")
+    if table.has("index"):
         try:
-            index = [int(r[cols["index"]]) for r in rows]
-        except (TypeError, ValueError):
-            raise MatrixFileError(f"{path}: the 'index' column must hold integers") from None
+            index = [int(v) for v in table.text("index")]
+        except ValueError:
+            raise table.error("the 'index' column must hold integers") from None
         if sorted(index) != list(range(1, len(index) + 1)):
             raise MatrixFileError(f"{path}: 'index' must number the rows 1..{len(index)} once "
                                   "each")
@@ -665,28 +658,21 @@ def read_coordinates(path) -> dict[str, np.ndarray]:
         When the file cannot be read, lacks the header, or a node is missing, listed twice or
         has a coordinate that is not a finite number.
     """
-    path = Path(path)
-    try:
-        with open(path, newline="") as handle:
-            rows = list(csv.DictReader(handle))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise MatrixFileError(f"{path}: cannot read the coordinates ({exc})") from None
-    if not rows or not {"node", "x", "y", "z"} <= {c.strip().lower() for c in rows[0]}:
-        raise MatrixFileError(f"{path}: coordinates need a header row node,x,y,z and one row "
-                              "per node")
+    hint = "a header row node,x,y,z and one row per node"
+    table = read_table(path, "coordinates", hint=hint, error=MatrixFileError)
+    table.require("node", "x", "y", "z", hint=hint)
     out = {}
-    for r in rows:
-        r = {k.strip().lower(): v for k, v in r.items() if k}
-        node = normalise_node(r.get("node") or "")
+    for i, r in enumerate(table.records()):
+        node = normalise_node(r["node"])
         if not node:
-            raise MatrixFileError(f"{path}: a row has no node id")
+            raise table.error("a row has no node id", i)
         if node in out:
-            raise MatrixFileError(f"{path}: node {node} is listed twice")
+            raise table.error(f"node {node} is listed twice", i)
         try:
             out[node] = np.array([float(r[c]) for c in "xyz"])
-        except (TypeError, ValueError):
-            raise MatrixFileError(f"{path}: node {r.get('node')!r} has a coordinate that is "
-                                  "not a number") from None
+        except ValueError:
+            raise table.error(f"node {r['node']!r} has a coordinate that is not a number",
+                              i) from None
         if not np.all(np.isfinite(out[node])):
-            raise MatrixFileError(f"{path}: node {node} has a coordinate that is not finite")
+            raise table.error(f"node {node} has a coordinate that is not finite", i)
     return out

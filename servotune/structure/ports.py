@@ -24,12 +24,13 @@ Every problem is a :class:`PortError` that names the port, what was not found an
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ..tablefile import TableFileError, read_table
 
 __all__ = [
     "DIRECTIONS",
@@ -54,7 +55,7 @@ for _i, _d in enumerate(DIRECTIONS):
         _ALIASES[_name] = _d
 
 
-class PortError(ValueError):
+class PortError(TableFileError):
     """A port that cannot be found in the export; the message names the port and the fix."""
 
 
@@ -174,35 +175,27 @@ def read_ports(path) -> tuple[Port, ...]:
         When the file cannot be read, is empty, lacks a column, or a row has neither a node
         nor a position or names a bad port or direction (the message names file and line).
     """
-    path = Path(path)
-    try:
-        with open(path, newline="") as handle:
-            rows = list(csv.DictReader(handle))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise PortError(f"{path}: cannot read the ports file ({exc})") from None
-    if not rows:
-        raise PortError(f"{path}: the ports file is empty (a header row port,node,direction "
-                        "or port,x,y,z,direction, then one row per port)")
-    columns = {c.strip().lower() for c in rows[0] if c is not None}
-    if not {"port", "direction"} <= columns or not ({"node"} <= columns
-                                                     or {"x", "y", "z"} <= columns):
-        raise PortError(f"{path}: the ports file needs the columns port, direction and node (or "
-                        f"x, y, z); found {sorted(columns)}")
+    table = read_table(path, "ports file", error=PortError,
+                       hint="a header row port,node,direction or port,x,y,z,direction, then "
+                            "one row per port")
+    if not table.has("port", "direction") or not (table.has("node")
+                                                  or table.has("x", "y", "z")):
+        raise table.error("the ports file needs the columns port, direction and node (or "
+                          f"x, y, z); found {sorted(table.header)}")
     ports = []
-    for line, row in enumerate(rows, start=2):
-        row = {str(k).strip().lower(): (v or "").strip() for k, v in row.items() if k}
+    for i, row in enumerate(table.records()):
         node = row.get("node") or None
         position = None
         if node is None:
             try:
                 position = tuple(float(row[c]) for c in "xyz")
             except (KeyError, ValueError):
-                raise PortError(f"{path}, line {line}: port {row.get('port')!r} has neither a "
-                                "node number nor a position x, y, z") from None
+                raise table.error(f"port {row.get('port')!r} has neither a node number nor a "
+                                  "position x, y, z", i) from None
         try:
             ports.append(Port(row.get("port", ""), row.get("direction", ""), node, position))
         except PortError as exc:
-            raise PortError(f"{path}, line {line}: {exc}") from None
+            raise table.error(str(exc), i) from None
     return tuple(ports)
 
 
