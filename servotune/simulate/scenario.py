@@ -60,9 +60,16 @@ class Scenario:
         linearised (0 standing still). Only the split of the law changes, not the model.
     name : str
         A label for reports.
-    sweep : tuple, optional
+    sweep : tuple or SweepPlan, optional
         ``(f_start_hz, f_end_hz, t_start, t_end, amplitude)`` of a linear sine sweep of the
-        force, which :meth:`SimulationResult.sweep_envelope` uses.
+        force, or the :class:`SweepPlan` of a variable-rate one, which
+        :meth:`SimulationResult.sweep_envelope` uses.
+
+    Raises
+    ------
+    ValueError
+        If the duration is not finite and > 0, the speed is not finite, or a force or the
+        motion is not callable.
     """
 
     duration: float
@@ -87,7 +94,25 @@ class Scenario:
             raise ValueError("motion must be a function t -> (x_ref, v_ref, a_ref)")
 
     def signals(self, t) -> dict[str, np.ndarray]:
-        """The input signals on the times t, keyed by plant input name (zero ones left out)."""
+        """Return the input signals on the times t, keyed by plant input name.
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s].
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``x_ref`` [m], ``v_ref`` [m/s], ``a_ref`` [m/s^2] (each left out when zero at every
+            time) and ``f_<dof>`` [N] per force (``f_wp_x`` for ``"wp.x"``), on the shape of
+            ``t``.
+
+        Raises
+        ------
+        ValueError
+            If a signal is not finite.
+        """
         t = np.asarray(t, dtype=float)
         out = {}
         if self.motion is not None:
@@ -106,13 +131,43 @@ class Scenario:
 
 
 def sweep_phase(t, f_start_hz: float, f_end_hz: float, duration: float):
-    """Phase [rad] of a linear sweep: 2 pi (f0 t + (f1 - f0) t^2 / (2 T))."""
+    """Return the phase of a linear sweep, 2 pi (f0 t + (f1 - f0) t^2 / (2 T)).
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s] from the start of the sweep.
+    f_start_hz, f_end_hz : float
+        Start and end frequency f0, f1 [Hz].
+    duration : float
+        Sweep time T [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Phase [rad], the shape of ``t``.
+    """
     t = np.asarray(t, dtype=float)
     return 2.0 * math.pi * (f_start_hz * t + 0.5 * (f_end_hz - f_start_hz) * t * t / duration)
 
 
 def sweep_frequency(t, f_start_hz: float, f_end_hz: float, duration: float):
-    """Instantaneous frequency [Hz] of a linear sweep: f0 + (f1 - f0) t / T."""
+    """Return the instantaneous frequency of a linear sweep, f0 + (f1 - f0) t / T.
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s] from the start of the sweep.
+    f_start_hz, f_end_hz : float
+        Start and end frequency f0, f1 [Hz].
+    duration : float
+        Sweep time T [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Frequency [Hz], the shape of ``t``.
+    """
     return f_start_hz + (f_end_hz - f_start_hz) * np.asarray(t, dtype=float) / duration
 
 
@@ -136,7 +191,7 @@ def _smooth_start(speed: float, t_start: float):
 def sine_sweep(force_pp: float, f_start_hz: float = 10.0, f_end_hz: float = 100.0,
                duration: float = 20.0, speed: float = 0.0, dof: str = "wp.x",
                start: float = DEFAULT_START) -> Scenario:
-    """A sine-sweep force at the work piece, standing still or moving (the paper's Table 3).
+    """Return a sine-sweep force at the work piece, standing still or moving (Table 3).
 
     Parameters
     ----------
@@ -151,6 +206,20 @@ def sine_sweep(force_pp: float, f_start_hz: float = 10.0, f_end_hz: float = 100.
         0.03), reached by a smooth start over ``start`` seconds.
     dof : str
         Work-piece DOF of the force.
+    start : float
+        Duration [s] of the smooth start to ``speed``.
+
+    Returns
+    -------
+    Scenario
+        The force ``(force_pp / 2) sin(sweep_phase(t))`` (:func:`sweep_phase`) from t = 0 to
+        ``duration``, with the sweep recorded for the envelope.
+
+    Raises
+    ------
+    ValueError
+        If the force, a frequency or the duration is not finite and > 0, or ``start`` is
+        negative.
 
     Examples
     --------
@@ -181,6 +250,19 @@ class SweepPlan:
     ``phase`` [rad] on the times ``t`` [s] from 0 to ``duration``; the instantaneous frequency
     is ``frequency_hz``. :meth:`servotune.simulate.SimulationResult.sweep_envelope` reads the
     cycle boundaries (phase = 2 pi k) from it.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Times [s] of the table, increasing.
+    phase : numpy.ndarray
+        Phase [rad] at ``t``.
+    frequency_hz : numpy.ndarray
+        Instantaneous frequency [Hz] at ``t``.
+    amplitude : float
+        Force amplitude [N] (half the peak to peak).
+    slow : tuple of (float, float)
+        The ``(f_low_hz, f_high_hz)`` windows swept slowly.
     """
 
     t: np.ndarray
@@ -202,33 +284,109 @@ class SweepPlan:
         return float(self.frequency_hz[-1])
 
     def phase_at(self, t) -> np.ndarray:
+        """Return the phase at times t, interpolated linearly in the table.
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s]; outside the table the end values hold.
+
+        Returns
+        -------
+        numpy.ndarray
+            Phase [rad].
+        """
         return np.interp(np.asarray(t, dtype=float), self.t, self.phase)
 
     def frequency_at(self, t) -> np.ndarray:
-        """Instantaneous frequency [Hz]."""
+        """Return the instantaneous frequency at times t, interpolated linearly in the table.
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s]; outside the table the end values hold.
+
+        Returns
+        -------
+        numpy.ndarray
+            Frequency [Hz].
+        """
         return np.interp(np.asarray(t, dtype=float), self.t, self.frequency_hz)
 
     def cycle_times(self, t_end: float) -> np.ndarray:
-        """Times where the phase passes 2 pi k, up to ``t_end``."""
+        """Return the times where the phase passes 2 pi k, up to ``t_end``.
+
+        Parameters
+        ----------
+        t_end : float
+            Last time [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            The cycle boundaries [s], k = 0, 1, ... (the first is the table's start).
+        """
         end = float(np.interp(t_end, self.t, self.phase))
         k = np.arange(0, math.floor(end / (2 * math.pi)) + 1)
         return np.interp(2 * math.pi * k, self.phase, self.t)
 
     def in_slow_window(self, f_hz: float) -> bool:
+        """Return whether a frequency lies in one of the slowly swept windows.
+
+        Parameters
+        ----------
+        f_hz : float
+            Frequency [Hz].
+
+        Returns
+        -------
+        bool
+            True when ``f_low_hz <= f_hz <= f_high_hz`` for a window of ``slow``.
+        """
         return any(lo <= f_hz <= hi for lo, hi in self.slow)
 
 
 def sweep_plan(f_start_hz: float, f_end_hz: float, amplitude: float, resonances=(),
                base_damping: float = 0.1, time_constants: float = 4.0,
                window: float = 0.15, step: float = 5e-5) -> SweepPlan:
-    """A sweep that passes every resonance slowly enough to show its steady-state peak.
+    """Return a sweep that passes every resonance slowly enough to show its steady-state peak.
 
     A resonance of frequency f and damping ratio zeta has a half-power band 2 zeta f and a
     time constant 1/(2 pi zeta f); a sweep shows its steady amplitude when it takes several
     time constants to cross that band, i.e. at a rate ``df/dt <= 4 pi zeta^2 f^2 / N``
     (N = ``time_constants``). The rate is set so everywhere for ``base_damping`` (any
-    resonance at least that damped is shown right), and within ``window`` (relative) of each
-    expected resonance ``(f_hz, zeta)`` for its own damping.
+    resonance at least that damped is shown right), and within ``window + 3 zeta`` (relative)
+    of each expected resonance ``(f_hz, zeta)`` for its own damping when that is slower. The
+    rate is laid out on 4000 log-spaced frequencies; the time to each follows from
+    ``dt = df / rate`` (trapezoidal rule) and the phase from ``2 pi int f dt``.
+
+    Parameters
+    ----------
+    f_start_hz, f_end_hz : float
+        Start and end frequency [Hz], 0 < start < end.
+    amplitude : float
+        Force amplitude [N] (half the peak to peak).
+    resonances : sequence of (float, float)
+        Expected resonances ``(frequency [Hz], damping ratio)``; those with a value not
+        finite and > 0 are skipped.
+    base_damping : float
+        Damping ratio the rate is set for everywhere.
+    time_constants : float
+        Number N of time constants spent crossing a half-power band.
+    window : float
+        Relative half-width of the slow window about a resonance, before the ``3 zeta``.
+    step : float
+        Time step [s] of the phase table.
+
+    Returns
+    -------
+    SweepPlan
+        The phase table and the slow windows (clipped to the band).
+
+    Raises
+    ------
+    ValueError
+        If a frequency is not finite and > 0, or ``f_start_hz >= f_end_hz``.
 
     Examples
     --------
@@ -266,9 +424,37 @@ def sweep_plan(f_start_hz: float, f_end_hz: float, amplitude: float, resonances=
 def planned_sweep(force_pp: float, plan: SweepPlan, speed: float = 0.0, dof: str = "wp.x",
                   settle: float = 0.0, ring_down: float = 0.0,
                   start: float = DEFAULT_START) -> Scenario:
-    """A force sweep at the work piece following a :class:`SweepPlan`, standing still or moving
-    at ``speed`` [m/s]; ``settle`` seconds of motion before the sweep (the slide reaches its
-    speed) and ``ring_down`` seconds without force after it (to see the response decay)."""
+    """Return a force sweep at the work piece following a :class:`SweepPlan`.
+
+    Parameters
+    ----------
+    force_pp : float
+        Force amplitude peak to peak [N] (replaces the plan's amplitude).
+    plan : SweepPlan
+        The sweep (from :func:`sweep_plan`).
+    speed : float
+        Constant axis speed [m/s] (0: standing still), reached by a smooth start.
+    dof : str
+        Work-piece DOF of the force.
+    settle : float
+        Time [s] of motion before the sweep (the slide reaches its speed).
+    ring_down : float
+        Time [s] without force after the sweep (to see the response decay).
+    start : float
+        Duration [s] of the smooth start to ``speed``.
+
+    Returns
+    -------
+    Scenario
+        Duration ``settle + plan.duration + ring_down``; the force acts from ``settle`` to
+        the plan's end, and the plan, shifted by ``settle``, is the scenario's ``sweep``.
+
+    Raises
+    ------
+    ValueError
+        If ``force_pp`` is not finite and > 0, or ``settle``, ``ring_down`` or ``start`` is
+        negative.
+    """
     force_pp = _positive("force_pp", force_pp)
     amplitude = 0.5 * force_pp
     t0 = _positive("settle", settle, True)
@@ -288,7 +474,28 @@ def planned_sweep(force_pp: float, plan: SweepPlan, speed: float = 0.0, dof: str
 
 
 def constant_speed(speed: float, duration: float, start: float = DEFAULT_START) -> Scenario:
-    """Move at constant speed [m/s] (reached by a smooth start over ``start`` s)."""
+    """Return a move at constant speed, reached by a smooth start.
+
+    Parameters
+    ----------
+    speed : float
+        Axis speed [m/s] (its sign is the direction).
+    duration : float
+        End time [s].
+    start : float
+        Duration [s] of the smooth start, ``v = V (3 s^2 - 2 s^3)`` with s = t/start.
+
+    Returns
+    -------
+    Scenario
+        The motion, no force.
+
+    Raises
+    ------
+    ValueError
+        If ``duration`` is not finite and > 0, ``start`` is negative, or ``speed`` is not
+        finite.
+    """
     return Scenario(duration=duration, motion=_smooth_start(float(speed),
                                                             _positive("start", start, True)),
                     speed=float(speed), name=f"constant speed {speed * 1e3:g} mm/s")
@@ -296,11 +503,35 @@ def constant_speed(speed: float, duration: float, start: float = DEFAULT_START) 
 
 def point_to_point(points, speed: float, acceleration: float, dwell: float = 0.0,
                    duration: float | None = None) -> Scenario:
-    """Moves through positions [m] with a trapezoidal velocity profile (reversals included).
+    """Return moves through positions with a trapezoidal velocity profile (reversals included).
 
-    Each move from ``points[i]`` to ``points[i+1]`` accelerates at ``acceleration`` [m/s^2] up
-    to ``speed`` [m/s] (or less on short moves), then dwells ``dwell`` seconds. The axis starts
-    at points[0] = its rest position (must be 0).
+    Each move from ``points[i]`` to ``points[i+1]`` accelerates at ``acceleration`` up to
+    ``speed`` (or to ``sqrt(distance acceleration)`` on short moves), decelerates alike, then
+    dwells ``dwell`` seconds. The axis starts at points[0] = its rest position (must be 0).
+
+    Parameters
+    ----------
+    points : array_like
+        Positions [m], at least two, the first 0.
+    speed : float
+        Largest speed [m/s], > 0.
+    acceleration : float
+        Acceleration and deceleration [m/s^2], > 0.
+    dwell : float
+        Rest [s] after each move.
+    duration : float, optional
+        End time [s]; default the end of the last dwell.
+
+    Returns
+    -------
+    Scenario
+        The motion, no force, at nominal speed 0.
+
+    Raises
+    ------
+    ValueError
+        If ``points`` is not as above, or a speed, acceleration, dwell or duration is out of
+        range.
     """
     points = np.asarray(points, dtype=float)
     if points.ndim != 1 or points.size < 2 or points[0] != 0.0:
@@ -343,9 +574,30 @@ def point_to_point(points, speed: float, acceleration: float, dwell: float = 0.0
 
 
 def sinusoid(amplitude: float, period: float, cycles: float = 2.0) -> Scenario:
-    """Position reference ``x = A (1 - cos(2 pi t / T))`` [m]: oscillation of amplitude A about
-    A, starting at rest, with a velocity reversal every half period (the paper's Fig 8: 10 um,
-    3.7 s)."""
+    """Return the position reference ``x = A (1 - cos(2 pi t / T))``.
+
+    An oscillation of amplitude A about A, starting at rest, with a velocity reversal every
+    half period (the paper's Fig 8: 10 um, 3.7 s).
+
+    Parameters
+    ----------
+    amplitude : float
+        Amplitude A [m], > 0.
+    period : float
+        Period T [s], > 0.
+    cycles : float
+        Number of periods simulated, > 0.
+
+    Returns
+    -------
+    Scenario
+        The motion, no force, duration ``cycles T``.
+
+    Raises
+    ------
+    ValueError
+        If a value is not finite and > 0.
+    """
     amplitude = _positive("amplitude", amplitude)
     period = _positive("period", period)
     w = 2.0 * math.pi / period
@@ -360,8 +612,30 @@ def sinusoid(amplitude: float, period: float, cycles: float = 2.0) -> Scenario:
 
 
 def circle(radius: float, period: float, cycles: float = 2.0) -> Scenario:
-    """The X component of a circle of ``radius`` [m] run in ``period`` [s], started at its X
-    extreme: ``x = R (cos(2 pi t / T) - 1)`` (the paper's Fig 2 circles of 20 and 5 um)."""
+    """Return the X component of a circle, started at its X extreme.
+
+    ``x = R (cos(2 pi t / T) - 1)``, from 0 to -2R and back (the paper's Fig 2 circles of 20
+    and 5 um).
+
+    Parameters
+    ----------
+    radius : float
+        Radius R [m], > 0.
+    period : float
+        Time T [s] of one circle, > 0.
+    cycles : float
+        Number of circles simulated, > 0.
+
+    Returns
+    -------
+    Scenario
+        The motion, no force, duration ``cycles T``.
+
+    Raises
+    ------
+    ValueError
+        If a value is not finite and > 0.
+    """
     radius = _positive("radius", radius)
     period = _positive("period", period)
     w = 2.0 * math.pi / period
@@ -377,9 +651,32 @@ def circle(radius: float, period: float, cycles: float = 2.0) -> Scenario:
 
 def custom(duration: float, x_ref=None, v_ref=None, a_ref=None, forces=None,
            speed: float = 0.0, name: str = "custom") -> Scenario:
-    """A scenario from user functions of time: ``x_ref(t)`` [m], ``v_ref(t)`` [m/s],
-    ``a_ref(t)`` [m/s^2] (feed-forward inputs; zero when not given) and ``forces``
-    ``{dof: f(t)}`` [N]."""
+    """Return a scenario from user functions of time.
+
+    Parameters
+    ----------
+    duration : float
+        End time [s].
+    x_ref, v_ref, a_ref : callable, optional
+        Position [m], velocity [m/s] and acceleration [m/s^2] references as functions of t
+        [s] (the last two feed the feed-forwards); zero when not given.
+    forces : dict, optional
+        ``{dof: f(t)}`` [N] at work-piece DOFs.
+    speed : float
+        Nominal sliding speed [m/s] (see :class:`Scenario`).
+    name : str
+        A label for reports.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If a reference or force is not callable, or the duration or speed is out of range.
+    """
     motion = None
     if any(f is not None for f in (x_ref, v_ref, a_ref)):
         for label, f in (("x_ref", x_ref), ("v_ref", v_ref), ("a_ref", a_ref)):
