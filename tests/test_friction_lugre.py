@@ -128,8 +128,10 @@ def test_canudas_presliding_natural_frequency_and_damping():
 
 
 @pytest.mark.parametrize("v0", [-0.2, -0.006, 0.0005, 0.004, 0.05])
-def test_sliding_linearisation_against_the_nonlinear_model(v0):
-    p = BIANCHI2014
+@pytest.mark.parametrize("p", [BIANCHI2014, dataclasses.replace(BIANCHI2014,
+                                                                sigma1_decay_speed=0.01)],
+                         ids=["constant-sigma1", "micro-damping"])
+def test_sliding_linearisation_against_the_nonlinear_model(p, v0):
     sys = lugre.sliding_linearisation(p, v0)
     # DC gain: slope of the steady-state curve by central differences
     h = 1e-6 * abs(v0)
@@ -414,18 +416,23 @@ def test_sliding_damping_at_30_mm_s_is_no_longer_negative(v_d):
 
 
 @pytest.mark.parametrize("v0", [-0.006, 0.004, 0.03])
-def test_sliding_linearisation_with_micro_damping_against_the_nonlinear_model(v0):
-    # small-signal response to a velocity step of 0.1 % against the simulated element
+def test_sliding_linearisation_with_micro_damping_has_the_written_out_feedthrough(v0):
+    # at steady sliding dz/dt = 0, so dF = sigma0 dz + sigma1(v0) d(dz/dt) + sigma2 dv with
+    # d(dz/dt)/dv = v0 g'(v0) / g(v0) (z0 = g sgn(v0) / sigma0): the instantaneous gain of the
+    # linearisation is sigma1(v0) v0 g'(v0) / g(v0) + sigma2, with the decayed sigma1(v0);
+    # g'(v) = -(Fs - Fc) delta |v|^(delta-1) sgn(v) / vs^delta exp(-|v/vs|^delta)
     p = BIANCHI_VD
-    sys = lugre.sliding_linearisation(p, v0)
-    dv = 1e-3 * abs(v0)
-    tau = g_ref(p, v0) / (p.sigma0 * abs(v0))
-    t = np.linspace(0.0, 6 * tau, 301)
-    z_ss = g_ref(p, v0) * np.sign(v0) / p.sigma0
-    r = lugre.simulate_lugre(p, t, velocity=lambda tt: np.full_like(tt, v0 + dv), z0=z_ss)
-    lin = control.step_response(sys, t).outputs * dv
-    df = r.force - float(lugre.steady_state_friction(p, v0))
-    assert_allclose(df[1:], lin[1:], rtol=5e-3, atol=5e-3 * np.max(np.abs(lin)))
+    sys = control.ss(lugre.sliding_linearisation(p, v0))
+    e = np.exp(-abs(v0 / p.vs) ** p.delta)
+    dg = -(p.fs - p.fc) * p.delta * abs(v0) ** (p.delta - 1) * np.sign(v0) / p.vs**p.delta * e
+    expected = s1_ref(p, v0) * v0 * dg / g_ref(p, v0) + p.sigma2
+    assert_allclose(float(sys.D[0, 0]), expected, rtol=1e-10)
+    # the bristle pole does not depend on sigma1: -sigma0 |v0| / g(v0)
+    assert_allclose(sys.poles().real, [-p.sigma0 * abs(v0) / g_ref(p, v0)], rtol=1e-12)
+    # and the feedthrough differs from the constant-sigma1 one by the decay of sigma1 alone
+    constant = control.ss(lugre.sliding_linearisation(BIANCHI2014, v0))
+    assert_allclose(float(constant.D[0, 0]) - p.sigma2, (expected - p.sigma2)
+                    * BIANCHI2014.sigma1 / s1_ref(p, v0), rtol=1e-9)
 
 
 @pytest.mark.parametrize("amplitude, f_hz", [(2e-6, 20.0), (50e-6, 20.0), (20e-6, 200.0)])
