@@ -45,7 +45,20 @@ class SimulationError(RuntimeError):
 
 @dataclass(frozen=True)
 class WindowEnergies:
-    """Works done on the structure over [t_start, t_end] and the energy balance [J]."""
+    """Works done on the structure over [t_start, t_end] and the energy balance [J].
+
+    Parameters
+    ----------
+    t_start, t_end : float
+        The window [s].
+    force, motor, friction, damping : float
+        Works [J] done on the structure by the work-piece force, the motor torque, the
+        guide-way friction and the structural damping (see the module docstring).
+    structure_change : float
+        Change of the structure's kinetic plus potential energy, Delta(T + V) [J].
+    bristle_change : float
+        Change of the bristles' elastic energy, sum sigma0_p z_p^2 / 2 [J].
+    """
 
     t_start: float
     t_end: float
@@ -79,6 +92,14 @@ class WindowEnergies:
         return -self.friction - self.bristle_change
 
     def to_dict(self) -> dict:
+        """Return the window's energies as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The window [s], the works and energy changes [J] under ``*_j`` names, the energy
+            dissipated by friction, and the balance's residual and relative residual.
+        """
         return {"t_start": self.t_start, "t_end": self.t_end, "energy_force_j": self.force,
                 "energy_motor_j": self.motor, "energy_friction_j": self.friction,
                 "energy_damping_j": self.damping,
@@ -118,6 +139,18 @@ class SweepEnvelope:
         return self.resonance / (2.0 * math.pi)
 
     def plot(self, reference=None):
+        """Plot the envelope against frequency (:func:`servotune.plots.plot_sweep_envelope`).
+
+        Parameters
+        ----------
+        reference : dict, optional
+            ``{label: (omega [rad/s], |compliance| [m/N])}`` linear curves drawn dashed.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+        """
         from .. import plots
 
         return plots.plot_sweep_envelope([self], reference=reference)
@@ -187,7 +220,24 @@ class SimulationResult:
         return i
 
     def energies(self, t_start: float, t_end: float) -> WindowEnergies:
-        """Works and energy balance over [t_start, t_end] (both must be checkpoints)."""
+        """Return the works and the energy balance over a window between two checkpoints.
+
+        Parameters
+        ----------
+        t_start, t_end : float
+            Start and end [s] of the window, each an energy checkpoint (within 1e-9 relative),
+            ``t_end > t_start``.
+
+        Returns
+        -------
+        WindowEnergies
+            The works done on the structure, the changes of its energy and of the bristles'.
+
+        Raises
+        ------
+        ValueError
+            If ``t_end <= t_start`` or a time is not a checkpoint.
+        """
         if not t_end > t_start:
             raise ValueError(f"the window must have t_end > t_start, got ({t_start}, {t_end})")
         i, j = self._checkpoint(t_start), self._checkpoint(t_end)
@@ -208,10 +258,20 @@ class SimulationResult:
         t_min : float
             Ignore cycles that start before this time [s] (the initial transient).
 
+        Returns
+        -------
+        SweepEnvelope
+            One point per force cycle from ``t_min`` on; the resonance and peak refined by a
+            parabola through the largest point and its neighbours when that has a maximum
+            within their spacing.
+
         Raises
         ------
         ValueError
-            If the scenario was not a sweep or too few samples per cycle were recorded.
+            If the scenario was not a sweep, too few samples (fewer than 8) were recorded in a
+            cycle, or no complete cycle starts after ``t_min``.
+        KeyError
+            If ``output`` is not a recorded signal.
         """
         if self.sweep is None:
             raise ValueError("the scenario has no force sweep (use scenario.sine_sweep)")
@@ -269,8 +329,26 @@ class SimulationResult:
         return SweepEnvelope(frequency=freq, time=tm, amplitude=amps, resonance=res, peak=peak)
 
     def plot(self, kind: str = "envelope", pad: str | None = None):
-        """Figures: ``"envelope"`` (sweep), ``"energies"`` (cumulative works) or
-        ``"hysteresis"`` (friction force against displacement of a pad)."""
+        """Return a figure of the result.
+
+        Parameters
+        ----------
+        kind : {"envelope", "energies", "hysteresis"}
+            The sweep envelope of ``wp_x``, the cumulative works, or the friction force
+            against the displacement of a pad.
+        pad : str, optional
+            The pad of the hysteresis figure; default the first.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+
+        Raises
+        ------
+        ValueError
+            If ``kind`` is unknown, or (``"envelope"``) the scenario was not a sweep.
+        """
         from .. import plots
 
         if kind == "envelope":
