@@ -34,6 +34,25 @@ class OdeModel:
 
     The state is ``[X, W]`` with W the four cumulative works (force, motor, friction,
     damping) [J].
+
+    Parameters
+    ----------
+    n : int
+        Length of the state ``[X, W]``.
+    rhs : callable
+        ``rhs(t, y) -> dy/dt``, t [s].
+    jac : callable
+        ``jac(t, y) -> (n, n)`` Jacobian of ``rhs`` in X (the rows and columns of W are zero:
+        the works do not feed back).
+    outputs : callable
+        ``outputs(t, y) -> array`` of the plant outputs.
+    output_names : tuple of str
+        Names of the outputs.
+    structure_energy : callable
+        ``structure_energy(y) -> T + V`` [J] of the structure.
+    bristle_energy : callable
+        ``bristle_energy(y) -> sum sigma0 z^2 / 2`` [J] of the bristles (0 without a nonlinear
+        law).
     """
 
     n: int
@@ -46,7 +65,22 @@ class OdeModel:
 
 
 def ode_model(axis: NonlinearAxis, scenario: Scenario) -> OdeModel:
-    """The axis and scenario as ``f(t, y)``, ``J(t, y)`` for ``scipy.integrate.solve_ivp``."""
+    """Return the axis and scenario as ``f(t, y)``, ``J(t, y)`` for ``scipy.integrate.solve_ivp``.
+
+    Parameters
+    ----------
+    axis : NonlinearAxis
+        Structure, drive, pads and friction law.
+    scenario : Scenario
+        References and forces; its inputs are those nonzero somewhere on 2001 points over
+        ``[0, duration]``.
+
+    Returns
+    -------
+    OdeModel
+        The right-hand side, its Jacobian, the readouts and the energies; the initial state
+        is zero (rest).
+    """
     sig_names = list(scenario.signals(np.linspace(0.0, scenario.duration, 2001)))
     friction = axis.friction
     nonlinear = friction is not None and friction.nonlinear
