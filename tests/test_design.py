@@ -2,30 +2,53 @@
 independent verification."""
 
 import json
+import math
 from pathlib import Path
 
+import control
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
-from servotune import twomass
 from servotune.axis import load_axis
 from servotune.cli import main
 from servotune.design import mode_peaks_vs_damping
+from servotune.plant import loop_transfer
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
+M1, K, ALPHA = 5000.0, 16e6, 0.3  # the paper's Fig 5 system (sec 4.1)
+
+
+def _two_mass_h(omega, c, m1=M1, k=K, alpha=ALPHA):
+    """x2/f2 of ground --C-- M1 --K-- M2 = alpha M1 (the paper's sec 4.1, PAPER_NOTES sec 3)."""
+    w = np.asarray(omega, dtype=float)
+    return (k - m1 * w**2 + 1j * w * c) / (alpha * m1**2 * w**4 - (1 + alpha) * k * m1 * w**2
+                                           + 1j * w * c * (k - alpha * m1 * w**2))
+
+
 def test_tune_two_mass_reproduces_copt_and_g_alpha(tmp_path, capsys):
-    # paper sec 4.1, Fig 5: Copt = 4.912e5 N s/m, peak g(alpha)/K, with alpha = 0.3
+    # paper sec 4.1, Fig 5: Copt = 4.912e5 N s/m (the paper's number), peak g(alpha)/K; the
+    # closed forms Copt = sqrt(K M1) f(alpha) and g(alpha) written out here (PAPER_NOTES sec 3)
     assert main(["tune", str(MODELS / "two_mass_fig5"), "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    system = twomass.TwoMassSystem(m1=5000.0, k=16e6, alpha=0.3)
+    a = ALPHA
+    root = math.sqrt(1 + a * a)
+    c_opt = math.sqrt(K * M1) * math.sqrt((3 * root + a - 1) / (2 * a * (a + root)))
+    g = (1 - a + root) / a
+    assert c_opt == pytest.approx(4.912e5, rel=1e-4)  # the closed form against the paper
     assert out["verified"] is True
-    assert out["design"]["c"] == pytest.approx(twomass.optimal_damping(system), rel=1e-4)
+    assert out["design"]["c"] == pytest.approx(c_opt, rel=1e-4)
     assert out["c_opt_analytic"] == pytest.approx(4.912e5, rel=1e-4)
-    assert out["peak_compliance_after"] == pytest.approx(twomass.g_alpha(0.3) / 16e6, rel=1e-6)
-    assert abs(out["two_mass_check"]["c_relative_difference"]) < 1e-4
-    assert (tmp_path / "tune_two_mass_fig5" / "results.json").is_file()
+    assert out["peak_compliance_after"] == pytest.approx(g / K, rel=1e-6)
+    # the reported peak is the peak of the closed-form x2/f2 at the tuned C over w >= w_f1
+    # (the band of the minimax optimum, excluding w -> 0 where |H| ~ 1/(w C))
+    w0 = math.sqrt(K / M1)
+    w_f1 = w0 * math.sqrt((1 + a - root) / (2 * a))
+    omega = np.linspace(w_f1, 4 * w0, 200_001)
+    h = np.abs(_two_mass_h(omega, out["design"]["c"]))
+    assert out["peak_compliance_after"] == pytest.approx(h.max(), rel=1e-5)
 
 
 def test_tune_keeps_a_file_that_is_not_its_own(tmp_path, capsys):
@@ -51,11 +74,18 @@ def test_the_bundled_axis_is_verified_regime_by_regime(bundled_job):
     for regime in out["regimes"]:
         assert regime["holds"], regime["reason"]
         assert regime["nonlinear_peak_after_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]
-    assert out["peak_compliance_after"] == max(r["claimed_peak_m_per_n"]
-                                               for r in out["regimes"])
     assert out["thrust"]["fits"] is True
-    for loop in ("velocity_loop", "position_loop"):
-        assert out["loops_after"][loop]["bandwidth_hz"] > 0
+    # second method: python-control's own frequency response of the tuned loops (the drive
+    # with the tuned gains, Pade delays in state space) meets the Ms limits, and its sensitivity
+    # peak is the one the report gives for those loops
+    drive = job.result.problem.drive_for(job.design)
+    contact = job.loops_after.contact
+    omega = 2 * np.pi * np.geomspace(0.1, 3000.0, 4000)
+    for loop in ("velocity", "position"):
+        lt = loop_transfer(axis.structure, drive, contact, axis.pads, loop)
+        ms = 1.0 / np.abs(1.0 + control.frequency_response(lt, omega).complex.ravel()).min()
+        assert ms <= req.ms_limit(loop) * 1.01
+        assert out["loops_after"][f"{loop}_loop"]["ms"] == pytest.approx(ms, rel=2e-3)
 
 
 def test_several_modes_ask_for_different_damping():
@@ -63,6 +93,28 @@ def test_several_modes_ask_for_different_damping():
     # smallest peaks at different C
     axis = load_axis(MODELS / "paper_x_axis")
     peaks = mode_peaks_vs_damping(axis, np.geomspace(1e3, 1e8, 21), c_chosen=1e6)
-    assert peaks.peaks.shape[0] >= 2
     best = sorted(peaks.c_best)
     assert best[-1] / best[0] > 1.5
+
+
+def test_mode_tracks_of_the_two_mass_system_end_at_the_closed_form_frequencies():
+    # ground --C-- M1 --K-- M2: with C -> 0 the mode is the free pair, w^2 = K (M1 + M2)/(M1 M2);
+    # with C -> inf M1 is held and M2 rings on K alone, w^2 = K / M2
+    axis = load_axis(MODELS / "two_mass_fig5")
+    peaks = mode_peaks_vs_damping(axis, [1.0, 1e10], c_chosen=4.912e3)
+    m2 = ALPHA * M1
+    assert peaks.frequencies.shape[0] == 1  # one oscillating mode
+    assert_allclose(peaks.frequencies[0, [0, -1]],
+                    [math.sqrt(K * (M1 + m2) / (M1 * m2)), math.sqrt(K / m2)], rtol=1e-6)
+
+
+@pytest.mark.xfail(strict=True, reason="servotune.design.mode_peaks_vs_damping takes a mode's "
+                   "peak as 2 |R| / |Re lambda|; the pair R/(s - lambda) + conj at s = j Im "
+                   "lambda gives |R| / |Re lambda|: its peaks are twice the compliance")
+def test_mode_peak_of_a_lightly_damped_two_mass_system_is_its_compliance_peak():
+    # reference: the closed-form x2/f2 of the paper's sec 4.1 near the single light mode
+    c = 4.912e3  # Copt / 100: 1.6 % damping, one isolated peak
+    axis = load_axis(MODELS / "two_mass_fig5")
+    peaks = mode_peaks_vs_damping(axis, [c], c_chosen=c)
+    omega = np.linspace(100.0, 130.0, 300_001)
+    assert peaks.peaks[0, 0] == pytest.approx(np.abs(_two_mass_h(omega, c)).max(), rel=0.02)
