@@ -37,6 +37,7 @@ __all__ = [
     "compliance_curve",
     "uncontrolled_compliance",
     "axis_lobes",
+    "feed_compliance",
     "default_omega",
 ]
 
@@ -55,6 +56,7 @@ def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
     Parameters
     ----------
     axis : Axis
+        The axis; its friction law builds the contact.
     kind : str
         A registered contact kind, e.g. ``"stiction"``, ``"viscous"``, ``"equivalent"``,
         ``"sliding"``; built from the axis' friction law.
@@ -212,16 +214,82 @@ def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[Compliance
     return curves
 
 
+def _lobes_omega() -> np.ndarray:
+    return default_omega(1.0, 2000.0, 6000)
+
+
+def feed_compliance(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None):
+    """Return the closed-loop work-piece compliance in the axis' feed direction, as data.
+
+    This is the compliance every chatter analysis of an axis uses (the design job's lobes and
+    ``servotune lobes AXIS``), on one frequency grid.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis (its ``[cutting]`` direction, else x).
+    contact : Contact
+        The guide-way contact model.
+    drive : Drive, optional
+        The drive (default: the axis' own; an axis without drive is taken uncontrolled).
+    omega : array_like, optional
+        Frequencies [rad/s] (default 1 to 2000 Hz, 6000 points, log-spaced).
+
+    Returns
+    -------
+    control.FrequencyResponseData
+        x/F at the work piece [m/N], input ``f_wp_<d>``, output ``wp_<d>``.
+
+    Raises
+    ------
+    servotune.plant.UnstableLoopError
+        When the closed loop is unstable (a compliance would mean nothing).
+
+    See Also
+    --------
+    axis_lobes : the stability lobes from this compliance.
+    """
+    omega = _lobes_omega() if omega is None else np.asarray(omega, float)
+    d = axis.cutting.direction if axis.cutting is not None else "x"
+    plant = axis_plant(axis, contact, drive,
+                       controlled=drive is not None or axis.drive is not None)
+    frequency.require_stable(plant)
+    return frequency.fast_frequency_response(plant, omega, inputs=[f"f_wp_{d}"],
+                                             outputs=[f"wp_{d}"])
+
+
 def axis_lobes(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,
                n_speeds: int = 2000):
-    """Zero-order stability lobes of the closed-loop axis in its feed direction, with the
-    axis' milling set-up (``[cutting]``) over its speed range."""
+    """Return the zero-order stability lobes of the closed-loop axis in its feed direction.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis, with its milling set-up (``[cutting]``): the speed range and direction.
+    contact : Contact
+        The guide-way contact model.
+    drive : Drive, optional
+        The drive (default: the axis' own).
+    omega : array_like, optional
+        Frequencies [rad/s] of the compliance (default: :func:`feed_compliance`'s).
+    n_speeds : int
+        Number of spindle speeds, equally spaced over the axis' speed range.
+
+    Returns
+    -------
+    servotune.chatter.StabilityLobes
+        The lobes, b_crit and the critical speed.
+
+    Raises
+    ------
+    ValueError
+        When the axis has no ``[cutting]`` section.
+
+    See Also
+    --------
+    feed_compliance : the compliance the lobes are computed from.
+    """
     cutting = axis.require_cutting()
-    omega = default_omega(1.0, 2000.0, 6000) if omega is None else np.asarray(omega, float)
-    plant = axis_plant(axis, contact, drive)
-    frequency.require_stable(plant)
-    d = cutting.direction
-    frd = frequency.fast_frequency_response(plant, omega, inputs=[f"f_wp_{d}"],
-                                            outputs=[f"wp_{d}"])
+    frd = feed_compliance(axis, contact, drive, omega)
     speeds = np.linspace(*cutting.speed_rpm, n_speeds)
-    return stability_lobes(frd, cutting.setup, speeds, direction=d)
+    return stability_lobes(frd, cutting.setup, speeds, direction=cutting.direction)

@@ -116,7 +116,18 @@ class ContactKind:
         return (*self.required, *self.optional)
 
     def missing(self, values) -> list[str]:
-        """The required parameters absent (or 0 where 0 is not allowed) in ``values``."""
+        """Return the required parameters absent (or 0 where 0 is not allowed).
+
+        Parameters
+        ----------
+        values : mapping
+            Parameter name -> value (None: not given).
+
+        Returns
+        -------
+        list of str
+            The names missing, in the order of :attr:`required`.
+        """
         return [p for p in self.required if values.get(p) is None
                 or (CONTACT_PARAMETERS[p].nonzero and not values.get(p))]
 
@@ -125,7 +136,17 @@ _CONTACT_KINDS: dict[str, ContactKind] = {}
 
 
 def register_contact_kind(kind: ContactKind) -> ContactKind:
-    """Add a contact kind (its name must be new); returns it.
+    """Register a contact kind (its name must be new).
+
+    Parameters
+    ----------
+    kind : ContactKind
+        The kind.
+
+    Returns
+    -------
+    ContactKind
+        ``kind``.
 
     Raises
     ------
@@ -140,12 +161,27 @@ def register_contact_kind(kind: ContactKind) -> ContactKind:
 
 
 def contact_kinds() -> tuple[str, ...]:
-    """The registered contact kinds, in registration order."""
+    """Return the registered contact kinds, in registration order.
+
+    Returns
+    -------
+    tuple of str
+        The kinds' names.
+    """
     return tuple(_CONTACT_KINDS)
 
 
 def contact_kind(name: str) -> ContactKind:
-    """The registered contact kind ``name``.
+    """Return the registered contact kind of a name.
+
+    Parameters
+    ----------
+    name : str
+        The kind, e.g. ``"stiction"``.
+
+    Returns
+    -------
+    ContactKind
 
     Raises
     ------

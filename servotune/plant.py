@@ -248,12 +248,28 @@ class GuideWayFriction:
 
     def contact(self, kind: str, amplitude: float | None = None, omega: float | None = None,
                 v0: float | None = None, c: float | None = None) -> Contact:
-        """The linear contact model of a kind (see :func:`contact_kinds`).
+        """Return the linear contact model of a kind (see :func:`contact_kinds`), axis total.
 
         ``stiction`` is the law's presliding contact; ``viscous`` the viscous-only damping (or
-        ``c`` [N s/m]); ``equivalent`` the law's describing function at a vibration
-        ``amplitude`` [m] and ``omega`` [rad/s] (Ceq and Keq); ``sliding`` the law linearised
-        at speed ``v0`` [m/s].
+        ``c``); ``equivalent`` the law's describing function (Ceq and Keq); ``sliding`` the law
+        linearised at a speed.
+
+        Parameters
+        ----------
+        kind : str
+            A registered contact kind.
+        amplitude : float, optional
+            Vibration amplitude [m] (``equivalent``).
+        omega : float, optional
+            Vibration angular frequency [rad/s] (``equivalent``).
+        v0 : float, optional
+            Sliding speed [m/s], non-zero (``sliding``).
+        c : float, optional
+            Viscous damping [N s/m] (``viscous``; default :attr:`viscous`).
+
+        Returns
+        -------
+        Contact
 
         Raises
         ------

@@ -105,12 +105,17 @@ class FrictionLaw:
 
     @classmethod
     def from_table(cls, value) -> FrictionLaw:
-        """The law from its entry ``[friction.<name>]`` of an axis description.
+        """Build the law from its entry ``[friction.<name>]`` of an axis description.
 
         Parameters
         ----------
         value : dict or str
             The table of parameters (SI) or the name of a published set.
+
+        Returns
+        -------
+        FrictionLaw
+            The law, axis totals.
 
         Raises
         ------
@@ -128,12 +133,27 @@ class FrictionLaw:
         return 0.0
 
     def presliding(self) -> tuple[float, float]:
-        """The contact linearised at rest: (stiffness [N/m], damping [N s/m]), axis totals."""
+        """Return the contact linearised at rest (all of it sticking), axis totals.
+
+        Returns
+        -------
+        (stiffness, damping) : tuple of float
+            Spring [N/m] and damper [N s/m] of the presliding contact.
+        """
         raise NotImplementedError
 
     def sliding_system(self, speed: float) -> control.StateSpace:
-        """The contact linearised about steady sliding at ``speed`` [m/s] (non-zero): a SISO
-        system from the velocity deviation [m/s] to the force deviation [N], axis total.
+        """Return the contact linearised about steady sliding at a speed, axis total.
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v0 [m/s], non-zero.
+
+        Returns
+        -------
+        control.StateSpace
+            SISO, from the velocity deviation [m/s] to the force deviation [N].
 
         Raises
         ------
@@ -186,48 +206,143 @@ class FrictionLaw:
         return len(self.remainder_prefixes) if self.nonlinear else 0
 
     def remainder_signals(self, pad: str) -> tuple[str, ...]:
-        """The names of the remainder inputs of one pad, one per component."""
+        """Return the names of the remainder inputs of one pad, one per component.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+
+        Returns
+        -------
+        tuple of str
+            ``<prefix><pad>`` for each of :attr:`remainder_prefixes`.
+        """
         return tuple(signal_name(pad, prefix) for prefix in self.remainder_prefixes[
             :self.n_remainders])
 
     def remainder_states(self, pad: str) -> tuple[str, ...]:
-        """The state of :meth:`pad_block` each remainder component reads (its ``z``)."""
+        """Return the state of :meth:`pad_block` each remainder component reads (its ``z``).
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+
+        Returns
+        -------
+        tuple of str
+            One state name per remainder component.
+        """
         raise NotImplementedError
 
     def spring_states(self, pad: str, n_pads: int) -> tuple[tuple[str, float], ...]:
-        """(state, stiffness [N/m]) of one pad's elastic states: the stored energy is
-        ``sum k z^2 / 2``."""
+        """Return one pad's elastic states with their stiffnesses (stored energy ``sum k z^2 / 2``).
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the law.
+
+        Returns
+        -------
+        tuple of (str, float)
+            (state name, stiffness [N/m]) pairs; empty for a law without elastic states.
+        """
         return ()
 
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
-        """The linear part for one pad of ``n_pads``, linearised about ``speed`` [m/s]."""
+        """Return the linear part of the law for one pad.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the axis-total law equally.
+        speed : float
+            Operating speed [m/s] of the linearisation (0: at rest).
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs ``v_<pad>``, the remainders and ``one``; outputs ``f_<pad>``, ``F_<pad>`` and the
+            law's states (see the class docstring).
+        """
         raise NotImplementedError
 
     def remainder(self):
-        """The compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``.
+        """Return the compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``.
 
         A module-level numba function (``numba.njit(cache=True)``) of the law's module: the
         simulation compiles its kernel around it
         (:func:`servotune.simulate.integrator.chunk_kernel`).
+
+        Returns
+        -------
+        numba dispatcher
+            The remainder [m/s] and its partial derivatives in v [-] and z [1/s].
         """
         raise NotImplementedError
 
     def remainder_parameters(self, speed: float = 0.0) -> np.ndarray:
-        """The parameter vector ``p`` of :meth:`remainder` for the linearisation about
-        ``speed`` [m/s]."""
+        """Return the parameter vector ``p`` of :meth:`remainder` for a linearisation.
+
+        Parameters
+        ----------
+        speed : float
+            Operating speed [m/s] of the linear part (0: at rest).
+
+        Returns
+        -------
+        numpy.ndarray
+            The parameters, in the order the remainder reads them.
+        """
         raise NotImplementedError
 
     def error_scales(self) -> tuple[float, tuple[float, ...]]:
-        """(velocity scale [m/s], state scale [m] per remainder component) of the local error
-        control: errors in the pad motion are measured relative to them."""
+        """Return the scales of the integrator's local error control.
+
+        Returns
+        -------
+        (v_scale, z_scales) : tuple
+            Velocity scale [m/s] and one state scale [m] per remainder component: errors in the
+            pad motion are measured relative to them.
+        """
         raise NotImplementedError
 
     def newton_tolerance(self, step: float) -> float:
-        """Tolerance [m/s] on the remainders in the Newton iteration for a step [s]."""
+        """Return the tolerance on the remainders in the Newton iteration of a step.
+
+        Parameters
+        ----------
+        step : float
+            The integration step [s].
+
+        Returns
+        -------
+        float
+            Tolerance [m/s].
+        """
         raise NotImplementedError
 
     def friction_force(self, v, z):
-        """Friction force [N], axis total, for pad velocity v [m/s] and state z."""
+        """Return the friction force, axis total, at a velocity and state.
+
+        Parameters
+        ----------
+        v : array_like
+            Pad velocity [m/s].
+        z : array_like
+            The law's state [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Friction force [N].
+        """
         raise NotImplementedError
 
     # ---------------------------------------------------------------- harmonic balance
@@ -264,7 +379,12 @@ def _discover() -> None:
 
 
 def friction_laws() -> dict[str, type]:
-    """All registered friction laws, by name (the laws package imported first).
+    """Return all registered friction laws, by name (the laws package imported first).
+
+    Returns
+    -------
+    dict of str to type
+        Name -> class on :class:`FrictionLaw`.
 
     Examples
     --------
@@ -276,17 +396,37 @@ def friction_laws() -> dict[str, type]:
 
 
 def friction_law_names() -> tuple[str, ...]:
-    """The names of the registered friction laws, sorted."""
+    """Return the names of the registered friction laws, sorted.
+
+    Returns
+    -------
+    tuple of str
+        The names (keys of ``[friction.<name>]``).
+    """
     return tuple(sorted(friction_laws()))
 
 
 def friction_law(name: str) -> type:
-    """The friction law class registered under ``name``.
+    """Return the friction law class registered under a name.
+
+    Parameters
+    ----------
+    name : str
+        The law's name (case-insensitive), e.g. ``"lugre"`` or ``"gms"``.
+
+    Returns
+    -------
+    type
+        The class on :class:`FrictionLaw`.
 
     Raises
     ------
     ValueError
         For an unknown name (the message lists the known ones).
+
+    See Also
+    --------
+    friction_law_names, friction_laws
 
     Examples
     --------

@@ -167,9 +167,20 @@ class GMSParameters:
         return len(self.stiffness)
 
     def scaled(self, factor: float) -> GMSParameters:
-        """The same contact with forces and coefficients times ``factor`` (k_i, sigma1_i, Fc, Fs,
-        sigma2; not alpha_i, vs, delta, C): ``1/n`` shares an axis total among n pads, whose
-        deflections then move exactly as the total's."""
+        """Return the same contact with forces and coefficients times a factor.
+
+        k_i, sigma1_i, Fc, Fs and sigma2 scale; alpha_i, vs, delta and C do not, so the deflections
+        move exactly as the total's: ``1/n`` shares an axis total among n pads.
+
+        Parameters
+        ----------
+        factor : float
+            The factor, > 0.
+
+        Returns
+        -------
+        GMSParameters
+        """
         factor = float(factor)
         if not (math.isfinite(factor) and factor > 0):
             raise ValueError(f"factor must be > 0, got {factor!r}")
@@ -179,17 +190,45 @@ class GMSParameters:
             fs=self.fs * factor, sigma2=self.sigma2 * factor)
 
     def stribeck(self, v) -> np.ndarray:
-        """s(v) = Fc + (Fs - Fc) exp(-(|v|/vs)^delta) [N]."""
+        """Return the Stribeck curve s(v) = Fc + (Fs - Fc) exp(-(|v|/vs)^delta).
+
+        Parameters
+        ----------
+        v : array_like
+            Velocity [m/s].
+
+        Returns
+        -------
+        numpy.ndarray
+            s(v) [N].
+        """
         v = np.asarray(v, dtype=float)
         return self.fc + (self.fs - self.fc) * np.exp(-(np.abs(v) / self.vs) ** self.delta)
 
     def slip_deflections(self, v: float = 0.0) -> tuple[float, ...]:
-        """Delta_i(v) = alpha_i s(v) / k_i [m]."""
+        """Return the slip deflections Delta_i(v) = alpha_i s(v) / k_i.
+
+        Parameters
+        ----------
+        v : float
+            Velocity [m/s].
+
+        Returns
+        -------
+        tuple of float
+            Delta_i [m], one per element.
+        """
         s = float(self.stribeck(v))
         return tuple(a * s / k for a, k in zip(self.fractions, self.stiffness, strict=True))
 
     def to_dict(self) -> dict:
-        """The parameters as a plain dictionary (lists for the elements)."""
+        """Return the parameters as a plain dictionary.
+
+        Returns
+        -------
+        dict
+            SI values, lists for the elements.
+        """
         d = dataclasses.asdict(self)
         return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
 
@@ -214,11 +253,31 @@ _NAMED = {"bianchi2014": BIANCHI2014_GMS}
 
 @numba.njit(cache=True)
 def gms_rate(v, z, lam, c, fc, fs, vs, delta):
-    """dz/dt of one element and its partial derivatives (dz/dt, d/dv, d/dz).
+    """Return dz/dt of one element and its partial derivatives (memoryless form).
 
-    ``lam = alpha_i / k_i`` [m/N] (Delta_i = lam s(v)), c the attraction rate C [m/s]; see the
-    module docstring (memoryless form). At v = 0 the rate is 0 and its v-derivative the stick
-    slope 1.
+    At v = 0 the rate is 0 and its v-derivative the stick slope 1 (module docstring).
+
+    Parameters
+    ----------
+    v : float
+        Sliding velocity [m/s].
+    z : float
+        Element deflection [m].
+    lam : float
+        alpha_i / k_i [m/N] (Delta_i = lam s(v)).
+    c : float
+        Attraction rate C [m/s].
+    fc, fs : float
+        Coulomb and static friction [N] (of the same share as k_i).
+    vs : float
+        Stribeck velocity [m/s].
+    delta : float
+        Stribeck exponent [-].
+
+    Returns
+    -------
+    (rate, d_dv, d_dz) : tuple of float
+        dz/dt [m/s] and its partial derivatives [-], [1/s].
     """
     if v == 0.0:
         return 0.0, 1.0, 0.0
@@ -239,11 +298,24 @@ def gms_rate(v, z, lam, c, fc, fs, vs, delta):
 
 @numba.njit(cache=True)
 def gms_remainder(component, v, z, p):
-    """Remainder of element ``component``: ``r = a0 + av v + az z - dz/dt`` and its partial
-    derivatives (see the module docstring).
+    """Return the remainder of one element, ``r = a0 + av v + az z - dz/dt``, and its derivatives.
 
-    ``p = (C, Fc, Fs, vs, delta, then per element lam_i, a0_i, av_i, az_i)``; Fc and Fs of any
-    share (only their ratio to lam_i^-1 enters through Delta_i = lam_i s).
+    Parameters
+    ----------
+    component : int
+        The element.
+    v : float
+        Sliding velocity [m/s].
+    z : float
+        The element's deflection [m].
+    p : numpy.ndarray
+        ``(C, Fc, Fs, vs, delta)`` then per element ``(lam_i, a0_i, av_i, az_i)``; Fc and Fs of
+        any share (they enter through Delta_i = lam_i s).
+
+    Returns
+    -------
+    (r, dr_dv, dr_dz) : tuple of float
+        r [m/s], dr/dv [-], dr/dz [1/s].
     """
     b = N_FIXED + PER_ELEMENT * component
     rate, d_v, d_z = gms_rate(v, z, p[b], p[0], p[1], p[2], p[3], p[4])
@@ -339,11 +411,12 @@ def _forces(params: GMSParameters, v: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 
 def gms_states(params: GMSParameters, t, velocity, z0=None) -> tuple[np.ndarray, np.ndarray]:
-    """Element deflections and friction force under an imposed velocity history.
+    """Integrate the element deflections and friction force under an imposed velocity history.
 
     Parameters
     ----------
     params : GMSParameters
+        The law's parameters (any share).
     t : array_like
         Increasing times [s].
     velocity : array_like
@@ -426,8 +499,23 @@ class GMSFriction(FrictionLaw):
 
     @classmethod
     def from_table(cls, value) -> GMSFriction:
-        """``[friction.gms]``: the fields of :class:`GMSParameters` (SI, lists for the
-        elements), or ``gms = "bianchi2014"``."""
+        """Build the law from ``[friction.gms]`` of an axis description: the fields of
+        :class:`GMSParameters` (SI, lists for the elements), or ``gms = "bianchi2014"``.
+
+        Parameters
+        ----------
+        value : dict or str
+            The entry of the axis file.
+
+        Returns
+        -------
+        GMSFriction
+
+        Raises
+        ------
+        ValueError
+            A parameter is missing, unknown or out of range.
+        """
         if isinstance(value, str):
             if value.lower() not in _NAMED:
                 raise ValueError(f"unknown GMS set {value!r}; choose one of {sorted(_NAMED)}")
@@ -444,7 +532,14 @@ class GMSFriction(FrictionLaw):
         return self.params.sigma2
 
     def presliding(self) -> tuple[float, float]:
-        """All elements stick: (sum k_i, sum sigma1_i + sigma2)."""
+        """Return the contact linearised at rest, axis totals: all elements stick, (sum k_i, sum
+        sigma1_i + sigma2).
+
+        Returns
+        -------
+        (stiffness, damping) : tuple of float
+            Spring [N/m] and damper [N s/m].
+        """
         p = self.params
         return float(sum(p.stiffness)), float(sum(p.damping) + p.sigma2)
 
@@ -467,14 +562,25 @@ class GMSFriction(FrictionLaw):
         return np.array(rows, dtype=float)
 
     def sliding_system(self, speed: float) -> control.StateSpace:
-        """Linearised about steady sliding at ``speed`` [m/s] (all elements slipping): per
-        element ``dz_i/dt = av_i v + az_i z_i`` (deviations), ``F = sum (k_i z_i + sigma1_i
-        dz_i/dt) + sigma2 v``; its DC gain is the slope of the Stribeck curve.
+        """Return the contact linearised about steady sliding at a speed, axis total: all elements
+        slipping, per element ``dz_i/dt = av_i v + az_i z_i`` (deviations) and ``F = sum (k_i z_i +
+        sigma1_i dz_i/dt) + sigma2 v``; its DC gain is the slope of the Stribeck curve, its poles -C
+        / Delta_i(v0).
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v0 [m/s], non-zero.
+
+        Returns
+        -------
+        control.StateSpace
+            SISO, from the velocity deviation [m/s] to the force deviation [N].
 
         Raises
         ------
         ValueError
-            If speed is 0 or not finite.
+            If ``speed`` is 0 or not finite.
         """
         if not speed:
             raise ValueError("the sliding contact needs a non-zero speed v0 [m/s]")
@@ -496,17 +602,58 @@ class GMSFriction(FrictionLaw):
         return tuple(signal_name(pad, f"z{i + 1}_") for i in range(self.params.n_elements))
 
     def remainder_states(self, pad: str) -> tuple[str, ...]:
-        """Element i's remainder reads its deflection ``z<i>_<pad>``."""
+        """Return the state each remainder component reads: element i's remainder reads its
+        deflection ``z<i>_<pad>``.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+
+        Returns
+        -------
+        tuple of str
+            One state name per remainder component.
+        """
         return self._states(pad)
 
     def spring_states(self, pad: str, n_pads: int) -> tuple[tuple[str, float], ...]:
-        """The element springs k_i / n_pads."""
+        """Return one pad's elastic states with their stiffnesses: the element springs k_i / n_pads.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the law.
+
+        Returns
+        -------
+        tuple of (str, float)
+            (state name, stiffness [N/m]) pairs.
+        """
         return tuple((z, k / n_pads) for z, k in zip(self._states(pad), self.params.stiffness,
                                                       strict=True))
 
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
-        """The elements of one pad, linearised about ``speed``: states z_i, inputs v, r_i and
-        ``one``, outputs f, F and the z_i (see the module docstring)."""
+        """Return the linear part for one pad: the element deflections z_i, linearised about rest
+        (stick) or steady sliding (module docstring).
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the axis-total law equally.
+        speed : float
+            Operating speed [m/s] of the linearisation (0: at rest).
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs ``v_<pad>``, ``r<i>_<pad>`` per element, ``one``; outputs ``f_<pad>``,
+            ``F_<pad>`` and the ``z<i>_<pad>``.
+        """
         p = self.params.scaled(1.0 / n_pads)
         n = p.n_elements
         tan = self._tangent(speed)
@@ -523,26 +670,78 @@ class GMSFriction(FrictionLaw):
                           states=states, name=f"friction_{signal_name(pad)}")
 
     def remainder(self):
-        """:func:`gms_remainder`."""
+        """Return the compiled remainder: :func:`gms_remainder`, one component per element.
+
+        Returns
+        -------
+        numba dispatcher
+            ``(component, v, z, p) -> (r, dr_dv, dr_dz)``.
+        """
         return gms_remainder
 
     def remainder_parameters(self, speed: float = 0.0) -> np.ndarray:
+        """Return the parameters of :meth:`remainder` for a linearisation: ``(C, Fc, Fs, vs,
+        delta)`` then per element ``(alpha_i / k_i, a0_i, av_i, az_i)``.
+
+        Parameters
+        ----------
+        speed : float
+            Operating speed [m/s] of the linear part (0: at rest).
+
+        Returns
+        -------
+        numpy.ndarray
+            The remainder's parameter vector.
+        """
         p = self.params
         lam = np.array(p.fractions) / np.array(p.stiffness)
         per = np.column_stack([lam, self._tangent(speed)])
         return np.concatenate([[p.attraction, p.fc, p.fs, p.vs, p.delta], per.ravel()])
 
     def error_scales(self) -> tuple[float, tuple[float, ...]]:
-        """vs and the slip deflections at rest Delta_i(0)."""
+        """Return the scales of the integrator's error control: vs and the slip deflections at rest
+        Delta_i(0).
+
+        Returns
+        -------
+        (v_scale, z_scales) : tuple
+            Velocity scale [m/s] and one state scale [m] per remainder component.
+        """
         return self.params.vs, self.params.slip_deflections(0.0)
 
     def newton_tolerance(self, step: float) -> float:
-        """1e-10 Fc through the elements' dampers and springs over a step."""
+        """Return the tolerance on the remainders in the Newton iteration: 1e-10 Fc through the
+        elements' dampers and springs over a step.
+
+        Parameters
+        ----------
+        step : float
+            The integration step [s].
+
+        Returns
+        -------
+        float
+            Tolerance [m/s].
+        """
         p = self.params
         return 1e-10 * p.fc / (sum(p.damping) + sum(p.stiffness) * step)
 
     def friction_force(self, v, z):
-        """F [N], axis total, at velocities v [m/s] (m,) and deflections z [m] (m, N)."""
+        """Return the friction force [N], axis total: ``sum (k_i z_i + sigma1_i dz_i/dt) + sigma2
+        v``.
+
+        Parameters
+        ----------
+        v : array_like
+            Pad velocity [m/s].
+        z : array_like
+            Element deflections [m], shape (len(v), N).
+
+        Returns
+        -------
+        numpy.ndarray
+            Friction force [N].
+        """
         v = np.atleast_1d(np.asarray(v, dtype=float))
         z = np.asarray(z, dtype=float).reshape(v.size, self.params.n_elements)
         return _forces(self.params, v, z)

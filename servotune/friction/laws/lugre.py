@@ -73,10 +73,24 @@ __all__ = ["LuGreFriction", "lugre_remainder", "lugre_damping_remainder"]
 
 @numba.njit(cache=True)
 def lugre_remainder(v, z, p):
-    """LuGre remainder r = a(v) z - (c0 + c_v v + c_z z) and its partial derivatives.
+    """Return the LuGre remainder r = a(v) z - (c0 + c_v v + c_z z) and its partial derivatives.
 
-    ``p = (sigma0, fc, fs, vs, delta, c0, c_v, c_z, ...)`` (sigma0, fc, fs of any share: only
-    their ratios enter). At v = 0 the derivative of |v| is taken as 0.
+    At v = 0 the derivative of |v| is taken as 0.
+
+    Parameters
+    ----------
+    v : float
+        Pad velocity [m/s].
+    z : float
+        Bristle deflection [m].
+    p : numpy.ndarray
+        ``(sigma0, fc, fs, vs, delta, c0, c_v, c_z, ...)`` (sigma0, fc, fs of any share: only
+        their ratios enter).
+
+    Returns
+    -------
+    (r, dr_dv, dr_dz) : tuple of float
+        r [m/s], dr/dv [-], dr/dz [1/s].
     """
     sigma0, fc, fs, vs, delta, c0, cv, cz = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]
     av = abs(v)
@@ -97,11 +111,27 @@ def lugre_remainder(v, z, p):
 
 @numba.njit(cache=True)
 def lugre_damping_remainder(component, v, z, p):
-    """Remainders of LuGre with micro-damping sigma1 e(v), e(v) = exp(-(v/v_d)^2).
+    """Return a remainder of LuGre with micro-damping sigma1 e(v), e(v) = exp(-(v/v_d)^2).
 
-    ``p = (sigma0, fc, fs, vs, delta, c0, c_v, c_z, v_d, m0, m_v, m_z)``. Component 0 is
-    :func:`lugre_remainder`; component 1 is ``q = m0 + m_v v + m_z z - e(v) (v - a(v) z)``
-    with its partial derivatives.
+    Component 0 is :func:`lugre_remainder`; component 1 is
+    ``q = m0 + m_v v + m_z z - e(v) (v - a(v) z)`` with its partial derivatives.
+
+    Parameters
+    ----------
+    component : int
+        0 (r) or 1 (q).
+    v : float
+        Pad velocity [m/s].
+    z : float
+        Bristle deflection [m].
+    p : numpy.ndarray
+        ``(sigma0, fc, fs, vs, delta, c0, c_v, c_z, v_d, m0, m_v, m_z)`` (the first eight alone
+        for component 0).
+
+    Returns
+    -------
+    (value, d_dv, d_dz) : tuple of float
+        The remainder [m/s] and its partial derivatives [-], [1/s].
     """
     r, dr_dv, dr_dz = lugre_remainder(v, z, p)
     if component == 0:
@@ -170,8 +200,19 @@ class LuGreFriction(FrictionLaw):
         return speed, z0, lugre_jacobian(p, z0, speed)
 
     def linearisation(self, speed: float = 0.0) -> tuple[float, float, float]:
-        """(c0, c_v, c_z) of ``w ~ c0 + c_v v + c_z z`` about rest (0, 0, 0) or steady sliding
-        at ``speed`` [m/s] (tangent at v0, z_ss = sgn(v0) g(v0)/sigma0)."""
+        """Return (c0, c_v, c_z) of ``w ~ c0 + c_v v + c_z z`` about rest or steady sliding.
+
+        Parameters
+        ----------
+        speed : float
+            Operating speed v0 [m/s]: 0 for rest (0, 0, 0), else the tangent at v0 and
+            z_ss = sgn(v0) g(v0)/sigma0.
+
+        Returns
+        -------
+        (c0, c_v, c_z) : tuple of float
+            c0 [m/s], c_v [-], c_z [1/s].
+        """
         speed, z0, jac = self._operating_point(speed)
         if jac is None:
             return 0.0, 0.0, 0.0
@@ -182,8 +223,20 @@ class LuGreFriction(FrictionLaw):
         return w0 - cv * speed - cz * z0, cv, cz
 
     def damping_linearisation(self, speed: float = 0.0) -> tuple[float, float, float]:
-        """(m0, m_v, m_z) of ``e(v) dz/dt ~ m0 + m_v v + m_z z`` about rest (0, 1, 0) or steady
-        sliding at ``speed`` (there dz/dt = 0, so the slope of e does not enter)."""
+        """Return (m0, m_v, m_z) of ``e(v) dz/dt ~ m0 + m_v v + m_z z`` about rest or steady
+        sliding.
+
+        Parameters
+        ----------
+        speed : float
+            Operating speed v0 [m/s]: 0 for rest (0, 1, 0); while sliding dz/dt = 0, so the slope of
+            e does not enter.
+
+        Returns
+        -------
+        (m0, m_v, m_z) : tuple of float
+            m0 [m/s], m_v [-], m_z [1/s].
+        """
         speed, z0, jac = self._operating_point(speed)
         if jac is None:
             return 0.0, 1.0, 0.0
@@ -194,6 +247,24 @@ class LuGreFriction(FrictionLaw):
         return -(mv * speed + mz * z0), mv, mz
 
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
+        """Return the linear part for one pad: the bristle state, linearised about rest or steady
+        sliding (module docstring).
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the axis-total law equally.
+        speed : float
+            Operating speed [m/s] of the linearisation (0: at rest).
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs ``v_<pad>``, ``r_<pad>`` (and ``q_<pad>`` with the micro-damping), ``one`` ;
+            outputs ``f_<pad>``, ``F_<pad>``, ``z_<pad>``.
+        """
         v, f, force, z = (signal_name(pad, pre) for pre in ("v_", "f_", "F_", "z_"))
         remainders = list(self.remainder_signals(pad))
         p = self.params.scaled(1.0 / n_pads)
@@ -217,28 +288,93 @@ class LuGreFriction(FrictionLaw):
                           name=f"friction_{signal_name(pad)}")
 
     def remainder(self):
-        """:func:`lugre_damping_remainder` (whose component 0 is :func:`lugre_remainder`)."""
+        """Return the compiled remainder: :func:`lugre_damping_remainder` (whose component 0 is
+        :func:`lugre_remainder`).
+
+        Returns
+        -------
+        numba dispatcher
+            ``(component, v, z, p) -> (r, dr_dv, dr_dz)``.
+        """
         return lugre_damping_remainder
 
     def remainder_states(self, pad: str) -> tuple[str, ...]:
-        """Both remainders read the bristle deflection ``z_<pad>``."""
+        """Return the state each remainder component reads: both remainders read the bristle
+        deflection ``z_<pad>``.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+
+        Returns
+        -------
+        tuple of str
+            One state name per remainder component.
+        """
         return (signal_name(pad, "z_"),) * self.n_remainders
 
     def spring_states(self, pad: str, n_pads: int) -> tuple[tuple[str, float], ...]:
-        """The bristles: ``z_<pad>`` with sigma0 / n_pads."""
+        """Return one pad's elastic states with their stiffnesses: the bristles ``z_<pad>`` with
+        sigma0 / n_pads.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the law.
+
+        Returns
+        -------
+        tuple of (str, float)
+            (state name, stiffness [N/m]) pairs.
+        """
         return ((signal_name(pad, "z_"), self.params.sigma0 / n_pads),)
 
     def error_scales(self) -> tuple[float, tuple[float, ...]]:
-        """The Stribeck velocity vs and the presliding deflection Fs/sigma0."""
+        """Return the scales of the integrator's error control: the Stribeck velocity vs and the
+        presliding deflection Fs/sigma0.
+
+        Returns
+        -------
+        (v_scale, z_scales) : tuple
+            Velocity scale [m/s] and one state scale [m] per remainder component.
+        """
         p = self.params
         return p.vs, (p.fs / p.sigma0,) * self.n_remainders
 
     def newton_tolerance(self, step: float) -> float:
-        """A force error of 1e-10 Fc through sigma1 + sigma0 h: 1e-10 Fc/(sigma1 + sigma0 h)."""
+        """Return the tolerance on the remainders in the Newton iteration: a force error of 1e-10 Fc
+        through sigma1 + sigma0 h.
+
+        Parameters
+        ----------
+        step : float
+            The integration step [s].
+
+        Returns
+        -------
+        float
+            Tolerance [m/s].
+        """
         p = self.params
         return 1e-10 * p.fc / (p.sigma1 + p.sigma0 * step)
 
     def remainder_parameters(self, speed: float = 0.0) -> np.ndarray:
+        """Return the parameters of :meth:`remainder` for a linearisation: ``(sigma0, fc, fs, vs,
+        delta, c0, c_v, c_z[, v_d, m0, m_v, m_z])``.
+
+        Parameters
+        ----------
+        speed : float
+            Operating speed [m/s] of the linear part (0: at rest).
+
+        Returns
+        -------
+        numpy.ndarray
+            The remainder's parameter vector.
+        """
         p = self.params
         head = [p.sigma0, p.fc, p.fs, p.vs, p.delta, *self.linearisation(speed)]
         if self.n_remainders == 1:
@@ -247,8 +383,23 @@ class LuGreFriction(FrictionLaw):
 
     @classmethod
     def from_table(cls, value) -> LuGreFriction:
-        """``[friction.lugre]``: a parameter table (:class:`LuGreParameters`, SI) or the name
-        of a published set (``lugre = "bianchi2014"``)."""
+        """Build the law from ``[friction.lugre]`` of an axis description: a parameter table
+        (:class:`LuGreParameters`, SI) or the name of a published set (``lugre = "bianchi2014"``).
+
+        Parameters
+        ----------
+        value : dict or str
+            The entry of the axis file.
+
+        Returns
+        -------
+        LuGreFriction
+
+        Raises
+        ------
+        ValueError
+            A parameter is missing, unknown or out of range.
+        """
         if isinstance(value, str):
             return cls(LuGreParameters.named(value))
         if isinstance(value, dict):
@@ -267,33 +418,98 @@ class LuGreFriction(FrictionLaw):
         return self.params.sigma2
 
     def presliding(self) -> tuple[float, float]:
-        """Spring sigma0 and damper sigma1 + sigma2
-        (:func:`servotune.friction.presliding_linearisation`)."""
+        """Return the contact linearised at rest, axis totals: spring sigma0 and damper sigma1 +
+        sigma2 (:func:`servotune.friction.presliding_linearisation`).
+
+        Returns
+        -------
+        (stiffness, damping) : tuple of float
+            Spring [N/m] and damper [N s/m].
+        """
         p = self.params
         return p.sigma0, p.sigma1 + p.sigma2
 
     def sliding_system(self, speed: float) -> control.StateSpace:
-        """:func:`servotune.friction.sliding_linearisation` at ``speed`` [m/s]."""
+        """Return the contact linearised about steady sliding at a speed, axis total:
+        :func:`servotune.friction.sliding_linearisation`.
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v0 [m/s], non-zero.
+
+        Returns
+        -------
+        control.StateSpace
+            SISO, from the velocity deviation [m/s] to the force deviation [N].
+
+        Raises
+        ------
+        ValueError
+            If ``speed`` is 0.
+        """
         if not speed:
             raise ValueError("the sliding contact needs a non-zero speed v0 [m/s]")
         return sliding_linearisation(self.params, speed)
 
     def describing_function(self, amplitude: float, omega: float,
                             n_samples: int = 512) -> tuple[float, float]:
-        """:func:`servotune.friction.describing_function` (the periodic LuGre cycle, Eq 8-10
-        of the paper); ``n_samples`` is not used."""
+        """Return the equivalent damping and stiffness under ``x = A sin(omega t)``:
+        :func:`servotune.friction.describing_function` (the periodic LuGre cycle, Eq 8-10 of the
+        paper).
+
+        Parameters
+        ----------
+        amplitude : float
+            Displacement amplitude A [m], > 0.
+        omega : float
+            Angular frequency [rad/s], > 0.
+        n_samples : int
+            Samples of the period (not used: the LuGre cycle has its own graded steps).
+
+        Returns
+        -------
+        (ceq, keq) : tuple of float
+            Ceq [N s/m] and Keq [N/m], axis totals.
+        """
         ceq, keq = describing_function(self.params, amplitude, omega)
         return float(ceq), float(keq)
 
     def periodic_force(self, velocity, period: float, share: float = 1.0) -> np.ndarray:
-        """Force [N] of one pad carrying ``share`` of the law on its periodic orbit:
-        :func:`servotune.friction.periodic.lugre_periodic_force` with
-        ``params.scaled(share)`` (see :meth:`FrictionLaw.periodic_force`)."""
+        """Return the force of one pad carrying ``share`` of the law on its periodic orbit:
+        :func:`servotune.friction.periodic.lugre_periodic_force` with ``params.scaled(share)``.
+
+        Parameters
+        ----------
+        velocity : array_like
+            Pad velocity [m/s] at N equally spaced instants of one period (periodic).
+        period : float
+            The period [s], > 0.
+        share : float
+            The pad's share of the axis-total law (``1 / n_pads``), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            The force [N] at the same instants.
+        """
         from ..periodic import lugre_periodic_force
 
         return lugre_periodic_force(self.params.scaled(share), velocity, period)
 
     def friction_force(self, v, z):
-        """F [N], axis total, for velocity v [m/s] and bristle deflection z [m]
-        (:func:`servotune.friction.lugre_force`)."""
+        """Return the friction force [N], axis total: :func:`servotune.friction.lugre_force`.
+
+        Parameters
+        ----------
+        v : array_like
+            Pad velocity [m/s].
+        z : array_like
+            Bristle deflection [m].
+
+        Returns
+        -------
+        numpy.ndarray
+            Friction force [N].
+        """
         return lugre_force(self.params, z, v)

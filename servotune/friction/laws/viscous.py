@@ -51,7 +51,22 @@ class ViscousFriction(FrictionLaw):
 
     @classmethod
     def from_table(cls, value) -> ViscousFriction:
-        """``[friction.viscous]`` with ``c`` [N s/m]."""
+        """Build the law from ``[friction.viscous]`` of an axis description: ``c`` [N s/m].
+
+        Parameters
+        ----------
+        value : dict
+            The entry of the axis file.
+
+        Returns
+        -------
+        ViscousFriction
+
+        Raises
+        ------
+        ValueError
+            A parameter is missing, unknown or out of range.
+        """
         if not (isinstance(value, dict) and set(value) == {"c"}):
             raise ValueError(f"give c = <damping in N s/m>, got {value!r}")
         return cls(value["c"])
@@ -62,28 +77,107 @@ class ViscousFriction(FrictionLaw):
         return self.c
 
     def presliding(self) -> tuple[float, float]:
-        """No spring, the damper c."""
+        """Return the contact linearised at rest, axis totals: no spring, the damper c.
+
+        Returns
+        -------
+        (stiffness, damping) : tuple of float
+            Spring [N/m] and damper [N s/m].
+        """
         return 0.0, self.c
 
     def sliding_system(self, speed: float) -> control.StateSpace:
-        """The damper c at any speed (a static gain from velocity to force)."""
+        """Return the contact linearised about steady sliding at a speed, axis total: the damper c
+        at any speed (a static gain).
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v0 [m/s].
+
+        Returns
+        -------
+        control.StateSpace
+            SISO, from the velocity deviation [m/s] to the force deviation [N].
+        """
         return control.ss([], [], [], [[self.c]], inputs=["velocity"], outputs=["force"])
 
     def describing_function(self, amplitude: float, omega: float,
                             n_samples: int = 512) -> tuple[float, float]:
-        """Ceq = c, Keq = 0 at every amplitude and frequency."""
+        """Return the equivalent damping and stiffness under ``x = A sin(omega t)``: Ceq = c, Keq =
+        0 at every amplitude and frequency.
+
+        Parameters
+        ----------
+        amplitude : float
+            Displacement amplitude A [m], > 0.
+        omega : float
+            Angular frequency [rad/s], > 0.
+        n_samples : int
+            Samples of the period (not used).
+
+        Returns
+        -------
+        (ceq, keq) : tuple of float
+            Ceq [N s/m] and Keq [N/m], axis totals.
+        """
         return self.c, 0.0
 
     def periodic_force(self, velocity, period: float, share: float = 1.0) -> np.ndarray:
-        """``share c v`` (memoryless)."""
+        """Return the force of one pad carrying ``share`` of the law on its periodic orbit: ``share
+        c v`` (memoryless).
+
+        Parameters
+        ----------
+        velocity : array_like
+            Pad velocity [m/s] at N equally spaced instants of one period (periodic).
+        period : float
+            The period [s], > 0.
+        share : float
+            The pad's share of the axis-total law (``1 / n_pads``), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            The force [N] at the same instants.
+        """
         return share * self.c * np.asarray(velocity, dtype=float)
 
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
+        """Return the linear part for one pad: a static gain, share c / n_pads.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF.
+        n_pads : int
+            The number of pads sharing the axis-total law equally.
+        speed : float
+            Operating speed [m/s] of the linearisation (0: at rest).
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs ``v_<pad>``; outputs ``f_<pad>``, ``F_<pad>``.
+        """
         v, f, force = (signal_name(pad, pre) for pre in ("v_", "f_", "F_"))
         share = self.c / n_pads
         return control.ss([], [], [], [[-share], [share]], inputs=[v], outputs=[f, force],
                           name=f"friction_{signal_name(pad)}")
 
     def friction_force(self, v, z=None):
-        """c v [N], axis total."""
+        """Return the friction force [N], axis total: c v.
+
+        Parameters
+        ----------
+        v : array_like
+            Pad velocity [m/s].
+        z : array_like
+            Not used (no state).
+
+        Returns
+        -------
+        numpy.ndarray
+            Friction force [N].
+        """
         return self.c * np.asarray(v, dtype=float)
