@@ -20,7 +20,23 @@ __all__ = ["AxisSetup", "axis_setup"]
 
 @dataclass(frozen=True, eq=False)
 class AxisSetup:
-    """What a simulation of an axis description needs (SI)."""
+    """What a simulation of an axis description needs (SI).
+
+    Parameters
+    ----------
+    name : str
+        The axis' name.
+    structure : ModalModel
+        The structure.
+    drive : Drive
+        The drive.
+    pads : tuple of str
+        The guide-way pad DOFs.
+    lugre : LuGreParameters
+        LuGre parameters of the friction (axis totals).
+    viscous : float
+        Viscous-only guide-way damping [N s/m] of the "vd" model.
+    """
 
     name: str
     structure: ModalModel
@@ -31,11 +47,21 @@ class AxisSetup:
 
 
 def axis_setup(axis) -> AxisSetup:
-    """Structure, drive, pads, LuGre parameters and viscous-only damping of an axis.
+    """Return the structure, drive, pads, LuGre parameters and viscous-only damping of an axis.
 
     The "vd" damping is ``[friction] viscous`` [N s/m] (default: the LuGre sigma2, the viscous
     part of the identified friction). The drive gets full velocity feed-forward unless
     ``[drive.feedforward] velocity`` is given.
+
+    Parameters
+    ----------
+    axis : Axis
+        A loaded axis description (:func:`servotune.axis.load_axis`).
+
+    Returns
+    -------
+    AxisSetup
+        What the simulation needs.
 
     Raises
     ------
