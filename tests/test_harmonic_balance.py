@@ -79,6 +79,20 @@ def test_a_linear_law_balances_to_the_linear_compliance(setup):
         assert np.abs(x[1:]).max() <= 1e-9 * abs(x[0])        # no higher harmonics
 
 
+def test_a_law_object_gives_the_balance_of_its_parameters(setup):
+    # the simulation's LuGre law class (through its own periodic_force, when it has one, and
+    # finite-difference Jacobians) against the LuGre parameters (lugre_periodic_force and its
+    # exact Jacobian): two routes to the same periodic solution
+    rec = pad_receptance(setup.structure, setup.drive, setup.pads)
+    w = RAD_S_PER_HZ * 55.0
+    out = []
+    for law in (LuGreFriction(setup.lugre), setup.lugre):
+        bal = PadBalance(rec, law, 300.0, 0.0, HarmonicSettings(5))
+        y, _ = bal.solve(w, presliding_guess(bal, w, setup.lugre))
+        out.append(bal.work_piece(y, w))
+    assert_allclose(out[0], out[1], rtol=1e-6, atol=1e-6 * abs(out[1][0]))
+
+
 # --- against the time simulation --------------------------------------------------------------
 
 CASES = [(50.0, 0.0), (600.0, 0.0), (2000.0, 0.0), (50.0, 0.03), (600.0, 0.03), (2000.0, 0.03)]
@@ -99,7 +113,7 @@ def test_peak_and_resonance_agree_with_the_time_simulation(setup, force_pp, spee
     grid = curve.resonance + RAD_S_PER_HZ * np.array([-1.0, -0.5, 0.0, 0.5, 1.0])
     sim = stepped_sine(setup, force_pp, grid, speed, tolerance=1e-3)
     rec = pad_receptance(setup.structure, setup.drive, setup.pads)
-    bal = PadBalance(rec, LuGreFriction(setup.lugre), 0.5 * force_pp, speed,
+    bal = PadBalance(rec, setup.lugre, 0.5 * force_pp, speed,
                      HarmonicSettings(9))
     hb = []
     y = presliding_guess(bal, grid[0], setup.lugre) if speed == 0 else None
@@ -146,7 +160,7 @@ def test_convergence_in_the_number_of_harmonics(setup):
     w = RAD_S_PER_HZ * 56.0
     values = {}
     for h in (1, 3, 5, 9, 21):
-        bal = PadBalance(rec, LuGreFriction(setup.lugre), 1000.0, 0.0, HarmonicSettings(h))
+        bal = PadBalance(rec, setup.lugre, 1000.0, 0.0, HarmonicSettings(h))
         y, _ = bal.solve(w, presliding_guess(bal, w, setup.lugre))
         values[h] = abs(bal.work_piece(y, w)[0])
     err = {h: abs(values[h] / values[21] - 1) for h in (1, 3, 5, 9)}

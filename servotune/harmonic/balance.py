@@ -332,9 +332,28 @@ class PadBalance:
         jac = np.eye(n * h2) + self._g_real(omega) @ block
         if not with_omega:
             return r, jac
+        return r, jac, self.omega_derivative(y, omega, r)
+
+    def omega_derivative(self, y, omega: float, r=None) -> np.ndarray:
+        """Return the derivative of the residual by the frequency (forward difference).
+
+        Parameters
+        ----------
+        y : array_like
+            Real unknowns [m].
+        omega : float
+            Angular frequency [rad/s].
+        r : numpy.ndarray, optional
+            The residual at ``(y, omega)`` when already known.
+
+        Returns
+        -------
+        numpy.ndarray
+            dR/domega [m s/rad].
+        """
+        r = self.residual(y, omega) if r is None else r
         d = 1e-7 * omega
-        r2 = self.residual(y, omega + d)
-        return r, jac, (r2 - r) / d
+        return (self.residual(y, omega + d) - r) / d
 
     def converged(self, r, y) -> bool:
         """Tell whether a residual is small enough (relative to the pad response).

@@ -337,8 +337,10 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     continuation : ContinuationSettings, optional
         Step control of the continuation.
     law : object, optional
-        The pad friction law (axis totals), default LuGre of ``setup``; any law with
-        ``periodic_force`` (see :func:`~servotune.harmonic.aft.periodic_friction_force`).
+        The pad friction law (axis totals): any law with ``periodic_force`` (see
+        :func:`~servotune.harmonic.aft.periodic_friction_force`); default the LuGre parameters
+        of ``setup`` themselves, evaluated by
+        :func:`~servotune.friction.periodic.lugre_periodic_force` with its exact Jacobian.
     references : bool
         Also the linear references (presliding, viscous-only, sliding at ``speed``).
     describing : bool
@@ -361,8 +363,6 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     --------
     servotune.simulate.simulate : the time simulation that checks it.
     """
-    from ..simulate.contact import LuGreFriction
-
     forces = [float(f) for f in np.atleast_1d(forces_pp)]
     if not forces or not all(math.isfinite(f) and f > 0 for f in forces):
         raise ValueError(f"force levels must be finite and > 0 N peak to peak, got {forces_pp!r}")
@@ -370,7 +370,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     if not (math.isfinite(speed) and speed >= 0.0):
         raise ValueError(f"the feed speed must be finite and >= 0 m/s, got {speed!r}")
     settings = settings or HarmonicSettings()
-    law = LuGreFriction(setup.lugre) if law is None else law
+    law = setup.lugre if law is None else law
     rec = pad_receptance(setup.structure, setup.drive, setup.pads)
     curves, df = [], []
     for j, fpp in enumerate(forces):

@@ -128,6 +128,14 @@ def _cascade_polynomials(drive: Drive) -> tuple:
              sampling.speed_measurement_delay, sampling.position_delay, sampling.speed_filter))
 
 
+def _horner(coefficients, s):
+    """A polynomial (highest power first) at s."""
+    out = np.full(s.shape, coefficients[0], dtype=complex)
+    for c in coefficients[1:]:
+        out = out * s + c
+    return out
+
+
 def _cascade_gains(drive: Drive, cascade: tuple, s: np.ndarray):
     """Motor torque per feedback position and per rotor angle, ``T = g_fb x_fb + g_rel phi``
     (no reference): the cascade of :func:`servotune.drive.cascade_response` with exact delays,
@@ -135,10 +143,10 @@ def _cascade_gains(drive: Drive, cascade: tuple, s: np.ndarray):
     ``a = C_i D_i F D_v C_v``."""
     (ci_n, ci_d), (f_n, f_d), (cv_n, cv_d), (t_i, t_v, t_m, t_p, t_f) = cascade
     m = drive.motor
-    ci = np.polyval(ci_n, s) / np.polyval(ci_d, s) * np.exp(-s * t_i)
+    ci = _horner(ci_n, s) / _horner(ci_d, s) * np.exp(-s * t_i)
     winding = s * m.inductance + m.resistance + ci
-    a = ci * np.polyval(f_n, s) / np.polyval(f_d, s) * np.exp(-s * t_v) * \
-        np.polyval(cv_n, s) / np.polyval(cv_d, s)
+    a = ci * _horner(f_n, s) / _horner(f_d, s) * np.exp(-s * t_v) * \
+        _horner(cv_n, s) / _horner(cv_d, s)
     measurement = np.exp(-s * t_m) / (1.0 + s * t_f)
     g_fb = -(a * np.exp(-s * t_p) * drive.kv / drive.ratio) / winding
     g_rel = -(a * measurement + m.torque_constant * m.back_emf_constant) * s / winding
