@@ -3,7 +3,7 @@
 A design (guide-way damping C, Kv, velocity Kp and Ti; :class:`servotune.tuning.Design`) is
 tuned on linear models. :func:`verify_design` simulates it with LuGre friction at the pads under
 sine sweeps standing still, and compares each sweep's resonance and peak oscillation per force
-with three linear predictions of the closed loop (:func:`servotune.frequency.port_compliance`):
+with four linear predictions of the closed loop (:func:`servotune.frequency.port_compliance`):
 
 * ``locked``: pads held rigidly;
 * ``presliding``: pads on the LuGre presliding contact (spring sigma0, damper sigma1 + C), the
@@ -44,8 +44,31 @@ DEFAULT_FORCES = (50.0, 600.0, 2000.0)
 
 def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float | None = None,
                  ti: float | None = None) -> AxisSetup:
-    """The axis set-up with a design's values: LuGre sigma2 = C (and the viscous-only C), the
-    drive's Kv and velocity PI (values left None keep the axis')."""
+    """Return the axis set-up with a design's values.
+
+    Parameters
+    ----------
+    setup : AxisSetup
+        The axis set-up (:func:`servotune.simulate.setup.axis_setup`).
+    c : float
+        Guide-way damping C [N s/m]: the LuGre sigma2 and the viscous-only damping.
+    kv : float, optional
+        Position gain Kv [1/s].
+    kp : float, optional
+        Velocity-loop gain Kp [N m s/rad].
+    ti : float, optional
+        Velocity-loop integral time Ti [s] (inf: no integral action).
+
+    Returns
+    -------
+    AxisSetup
+        The set-up with these values; values left None keep the axis'.
+
+    Raises
+    ------
+    ValueError
+        If a value given is not finite and > 0 (Ti may be inf).
+    """
     for name, value in (("c", c), ("kv", kv), ("kp", kp), ("ti", ti)):
         if value is not None and not ((math.isfinite(value) and value > 0) or
                                       (name == "ti" and value == math.inf)):
@@ -64,13 +87,39 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
                   peak_tol: float = 0.2, executor=None) -> dict:
     """Simulate the design (already in ``setup``, see :func:`design_setup`) and compare.
 
+    Each force gives one sine sweep (:func:`servotune.simulate.scenario.sine_sweep`), standing
+    still; its envelope from 10 % of the duration on gives the resonance and peak, and the
+    pads' envelopes at the resonance the pad amplitude. The predictions are peaks of
+    :func:`servotune.frequency.port_compliance` on 3000 points over the swept band. A
+    prediction agrees when the simulated resonance lies within ``freq_tol`` and the peak
+    within ``peak_tol`` of it (relative).
+
+    Parameters
+    ----------
+    setup : AxisSetup
+        The axis with the design (:func:`design_setup`).
+    forces : sequence of float
+        Peak-to-peak work-piece forces [N], one sweep each.
+    f_start_hz, f_end_hz : float
+        Swept band [Hz].
+    duration : float
+        Duration of each sweep [s].
+    freq_tol : float
+        Relative tolerance on the resonance.
+    peak_tol : float
+        Relative tolerance on the peak.
+    executor : concurrent.futures.Executor, optional
+        Runs the sweeps in parallel.
+
     Returns
     -------
     dict
-        ``linear``: the locked and viscous predictions (resonance [Hz], peak [m/N]);
+        ``linear``: the locked, presliding and viscous predictions (resonance [Hz], peak
+        [m/N]);
         ``sweeps``: per force, the simulated resonance and peak, the pad amplitude at the
         resonance, the describing-function prediction at that amplitude, and for each
-        prediction whether it agrees (``agrees_<name>``).
+        prediction whether it agrees (``agrees_<name>``); ``freq_tol``, ``peak_tol`` and
+        the ``design`` (C, Kv, Kp, Ti).
     """
     omega = 2 * math.pi * np.linspace(f_start_hz, f_end_hz, 3000)
 
