@@ -164,3 +164,36 @@ def test_the_kernel_follows_a_changed_law_never_stale(toy_law):
         assert_allclose(run.signals["wp_x"], reference, atol=1e-4 * np.abs(reference).max())
     # the two laws differ visibly, so the check above could tell them apart
     assert np.abs(results[50.0] - results[5000.0]).max() > 0.05 * np.abs(results[50.0]).max()
+
+
+def test_lugre_periodic_force_is_the_stribeck_curve_while_sliding_and_shares_linearly():
+    # steady sliding: dz/dt = 0, so F = sgn(v) g(v) + sigma2 v (Canudas de Wit et al. 1995,
+    # Eq 6), written out here; a pad's share of the law carries that share of the force
+    from servotune.simulate import LuGreFriction
+
+    p = LuGreParameters.named("bianchi2014")
+    law = LuGreFriction(p)
+    for v in (-0.03, 0.004):
+        g = p.fc + (p.fs - p.fc) * np.exp(-(abs(v) / p.vs) ** p.delta)
+        assert_allclose(law.periodic_force(np.full(16, v), 0.01, share=0.25),
+                        0.25 * (np.sign(v) * g + p.sigma2 * v), rtol=1e-9)
+    t = np.arange(64) / 64 * 0.02
+    v = 2e-3 * np.cos(2 * np.pi * 50 * t)
+    assert_allclose(law.periodic_force(v, 0.02, share=0.25), 0.25 * law.periodic_force(v, 0.02),
+                    rtol=1e-9, atol=1e-9 * p.fs)
+
+
+@pytest.mark.parametrize("amplitude", [2e-7, 2e-6, 2e-5])
+def test_first_harmonic_of_the_periodic_force_is_the_lugre_describing_function(amplitude):
+    # two methods: the interface's describing function (first harmonic of periodic_force, the
+    # orbit from the harmonic-balance hook) against the LuGre cycle of
+    # servotune.friction.describing_function (its own graded integration, Eq 8-10)
+    from servotune.friction import describing_function
+    from servotune.simulate import LuGreFriction
+
+    p = LuGreParameters.named("bianchi2014")
+    omega = 2 * np.pi * 57.0
+    ceq, keq = FrictionLaw.describing_function(LuGreFriction(p), amplitude, omega, 1024)
+    ceq_ref, keq_ref = describing_function(p, amplitude, omega)
+    assert_allclose(ceq, ceq_ref, rtol=2e-3)
+    assert_allclose(keq, keq_ref, rtol=2e-3, atol=2e-3 * p.sigma0)
