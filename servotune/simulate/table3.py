@@ -41,8 +41,22 @@ __all__ = ["Trial", "SweepSettings", "PAPER_TABLE3", "TRIALS", "run_trial", "tab
 
 @dataclass(frozen=True)
 class Trial:
-    """One row of Table 3: model ``"lg"`` (LuGre) or ``"vd"`` (viscous only), force [N p-p],
-    speed [m/s]."""
+    """One row of Table 3: the friction model, the force and the speed.
+
+    Parameters
+    ----------
+    model : {"lg", "vd"}
+        LuGre friction, or the viscous damping ``[friction] viscous`` alone.
+    force_pp : float
+        Peak-to-peak force at the work piece [N], > 0.
+    speed : float
+        Axis speed [m/s] (0: standing still).
+
+    Raises
+    ------
+    ValueError
+        If the model is unknown or the force is not finite and > 0.
+    """
 
     model: str
     force_pp: float
@@ -57,7 +71,27 @@ class Trial:
 
 @dataclass(frozen=True)
 class SweepSettings:
-    """The sweep and the energy window (defaults: the paper's 10 -> 100 Hz in 20 s, 2 .. 20 s)."""
+    """The sweep and the energy window (defaults: the paper's 10 -> 100 Hz in 20 s, 2 .. 20 s).
+
+    Parameters
+    ----------
+    f_start_hz, f_end_hz : float
+        Start and end frequency [Hz] of the linear sweep, 0 < start < end.
+    duration : float
+        Sweep time [s].
+    window : (float, float)
+        Energy window [s] within ``[0, duration]``.
+    step : float
+        Integration step [s] of :func:`servotune.simulate.simulator.simulate`.
+    tolerance : float
+        Local error allowed per step in the pad motion, relative to vs and Fs/sigma0 (see
+        :func:`servotune.simulate.simulator.simulate`).
+
+    Raises
+    ------
+    ValueError
+        If the window does not lie within the sweep or the frequencies are out of order.
+    """
 
     f_start_hz: float = 10.0
     f_end_hz: float = 100.0
@@ -100,8 +134,31 @@ TRIALS = tuple(Trial(m, float(f), float(v)) for m, f, v, *_ in PAPER_TABLE3)
 
 
 def run_trial(setup: AxisSetup, trial: Trial, settings: SweepSettings) -> dict:
-    """Simulate one trial; a plain dict (the JSON row plus diagnostics). Picklable in and out,
-    so that any executor can run it."""
+    """Simulate one trial and return its row. Picklable in and out, so any executor can run it.
+
+    Parameters
+    ----------
+    setup : AxisSetup
+        The axis.
+    trial : Trial
+        Friction model, force and speed.
+    settings : SweepSettings
+        Sweep, energy window, step and tolerance.
+
+    Returns
+    -------
+    dict
+        The JSON row: model, force [N], speed [m/s], the works over the window [J]
+        (friction, motor, force, damping), the structure's energy change and the friction
+        dissipation [J], the balance's relative residual, the resonance [Hz] and peak
+        oscillation per force [m/N] of the envelope (cycles from ``min(window[0],
+        duration / 4)`` on), the number of steps and the wall time [s].
+
+    Raises
+    ------
+    SimulationError
+        If the integration stops before the end.
+    """
     friction = (LuGreFriction(setup.lugre) if trial.model == "lg"
                 else ViscousFriction(setup.viscous))
     axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, friction)
@@ -124,9 +181,24 @@ def run_trial(setup: AxisSetup, trial: Trial, settings: SweepSettings) -> dict:
 
 
 def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
-    """Compliance peaks [Hz, m/N] of the linear closed loop within the sweep band: pads locked
-    (stiction at low force), LuGre presliding (spring sigma0, damper sigma1 + sigma2) and
-    viscous-only pads."""
+    """Return the compliance peaks of the linear closed loop within the sweep band.
+
+    Pads locked (stiction at low force), LuGre presliding (spring sigma0, damper
+    sigma1 + sigma2) and viscous-only pads, on 2000 points over the band
+    (:func:`servotune.frequency.port_compliance`).
+
+    Parameters
+    ----------
+    setup : AxisSetup
+        The axis.
+    settings : SweepSettings
+        The sweep band.
+
+    Returns
+    -------
+    dict
+        ``{"locked" | "presliding" | "viscous": {"resonance_hz", "compliance_m_per_n"}}``.
+    """
     omega = 2 * math.pi * np.linspace(settings.f_start_hz, settings.f_end_hz, 2000)
     p = setup.lugre
     out = {}
@@ -141,7 +213,7 @@ def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
 
 def check_remarks(rows: list[dict], references: dict, setup: AxisSetup,
                   settings: SweepSettings) -> dict:
-    """The paper's remarks A-C on simulated rows; each ``{"holds": bool, "detail": str}``.
+    """Return the paper's remarks A-C checked on simulated rows.
 
     A: standing still at the lowest force, LuGre resonates nearer the locked-pad frequency than
        the viscous-only one and most of the injected energy is dissipated by friction
@@ -153,6 +225,30 @@ def check_remarks(rows: list[dict], references: dict, setup: AxisSetup,
        the lowest force (friction at large amplitude damps more than stiction holds); whether
        it is also below viscous-only's at the same force (as in the paper) is reported as
        ``below_viscous``, which depends on the axis.
+
+    A remark whose rows are missing is left out.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`run_trial`; at least one standing still.
+    references : dict
+        From :func:`linear_references`.
+    setup : AxisSetup
+        The axis (its LuGre parameters for F_ss).
+    settings : SweepSettings
+        The energy window.
+
+    Returns
+    -------
+    dict
+        ``{"A" | "B" | "C": {"holds": bool, "detail": str}}``; C also has
+        ``below_viscous``.
+
+    Raises
+    ------
+    ValueError
+        If no row stands still.
     """
     locked = references["locked"]["resonance_hz"]
     viscous = references["viscous"]["resonance_hz"]
@@ -201,7 +297,21 @@ def check_remarks(rows: list[dict], references: dict, setup: AxisSetup,
 
 @dataclass(frozen=True)
 class Table3:
-    """Rows (in trial order), the paper's rows, the linear references and the remarks."""
+    """Rows (in trial order), the linear references and the remarks of a Table 3 run.
+
+    Parameters
+    ----------
+    axis : str
+        The axis' name.
+    rows : tuple of dict
+        Rows of :func:`run_trial`, in trial order.
+    references : dict
+        From :func:`linear_references`.
+    remarks : dict
+        From :func:`check_remarks`.
+    settings : SweepSettings
+        The sweep.
+    """
 
     axis: str
     rows: tuple
@@ -210,6 +320,15 @@ class Table3:
     settings: SweepSettings
 
     def to_dict(self) -> dict:
+        """Return the run as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``axis``, ``rows`` (each with the paper's values under ``paper`` when the trial is
+            one of :data:`PAPER_TABLE3` and the sweep is the paper's), ``linear_references``,
+            ``remarks`` and ``sweep``.
+        """
         paper = {(m, float(f), float(v)): (ef, em, res, osc) for m, f, v, ef, em, res, osc in
                  PAPER_TABLE3}
         rows = []
@@ -244,9 +363,20 @@ def table3(setup: AxisSetup, executor=None, trials=TRIALS,
         runs the trials one after the other in this process.
     trials : sequence of Trial
         Default: the paper's 15.
-    settings : SweepSettings
+    settings : SweepSettings, optional
+        Default: the paper's sweep and window.
     progress : callable, optional
         Called with ``(done, total)`` as trials finish.
+
+    Returns
+    -------
+    Table3
+        The rows in trial order, the linear references and the remarks.
+
+    Raises
+    ------
+    SimulationError
+        If a trial's integration stops before the end.
     """
     settings = SweepSettings() if settings is None else settings
     trials = tuple(trials)
