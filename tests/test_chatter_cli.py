@@ -2,6 +2,7 @@
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ import pytest
 from servotune import chatter
 from servotune.cli import main
 
+ROOT = Path(__file__).resolve().parent.parent
 MODE = ["--mode", "922", "0.011", str(0.03993 * (2 * math.pi * 922.0) ** 2)]
 
 
@@ -115,7 +117,7 @@ def test_axis_lobes_agree_with_the_closed_loop_compliance(tmp_path, capsys):
     # -1/(2 Kt mu min Re G) of that compliance (computed here directly from the plant)
     import numpy as np
 
-    from servotune import analysis, chatter
+    from servotune import analysis
     from servotune.axis import load_axis
 
     models = __import__("pathlib").Path(__file__).resolve().parents[1] / "models"
@@ -128,3 +130,33 @@ def test_axis_lobes_agree_with_the_closed_loop_compliance(tmp_path, capsys):
     mu = chatter.directional_factor(axis.cutting.setup, "x")
     expected = -1.0 / (2 * axis.cutting.setup.kt * (mu * curve.values.real).min())
     assert out["b_crit_m"] == pytest.approx(expected, rel=2e-3)
+
+
+def test_lobes_of_an_axis_use_the_design_jobs_compliance(capsys, tmp_path, monkeypatch):
+    # `servotune lobes AXIS` and the design job's lobes take the compliance from one function
+    # on one grid; the reference here is python-control's own frequency response of the
+    # closed-loop plant on that grid, turned into lobes by the same zero-order method
+    import control
+
+    from servotune import analysis
+    from servotune.axis import load_axis
+
+    monkeypatch.chdir(tmp_path)
+    axis_dir = ROOT / "models" / "paper_x_axis"
+    # the axis' own gains are stable only without the digital drive's delays (--continuous)
+    out = run_json(["lobes", str(axis_dir), "--continuous", "--no-plots", "--json"], capsys)
+    axis = load_axis(axis_dir).with_continuous_drive()
+    contact = analysis.axis_contact(axis, "viscous")     # the command's default
+    plant = analysis.axis_plant(axis, contact)
+    d = axis.cutting.direction
+    sub = plant[plant.output_labels.index(f"wp_{d}"), plant.input_labels.index(f"f_wp_{d}")]
+    omega = np.geomspace(2 * np.pi * 1.0, 2 * np.pi * 2000.0, 6000)
+    frd = control.frequency_response(sub, omega)
+    speeds = np.linspace(*axis.cutting.speed_rpm, len(out["lobes"]["speed_rpm"]))
+    reference = chatter.stability_lobes(frd, axis.cutting.setup, speeds, direction=d)
+    # python-control's dense response of this 100-state plant is itself accurate to ~2e-5
+    # (benchmarks/README.md, frequency_response.py), hence the tolerance
+    assert out["b_crit_m"] == pytest.approx(reference.b_crit, rel=1e-4)
+    assert out["critical_speed_rpm"] == pytest.approx(reference.critical_speed_rpm, rel=1e-4)
+    design_job = analysis.axis_lobes(axis, contact, n_speeds=len(speeds))
+    assert out["b_crit_m"] == pytest.approx(design_job.b_crit, rel=1e-12)

@@ -135,18 +135,16 @@ def _compliance(args):
     if len(given) > 1:
         raise ValueError(f"give one source of the compliance, not {' and '.join(given)}")
     if args.axis is not None:
-        from ..analysis import axis_plant
+        from ..analysis import feed_compliance
         from ..axis import load_axis
-        from ..frequency import require_stable
 
         axis = axis_from_args(load_axis(args.axis), args)
         contact = contact_from_args(axis, args)
-        plant = axis_plant(axis, contact, controlled=axis.drive is not None)
-        require_stable(plant)
-        d = axis.cutting.direction if axis.cutting is not None else args.direction
+        # the compliance the design job's lobes use, on the same frequency grid
+        frd = feed_compliance(axis, contact)
+        d = axis.cutting.direction if axis.cutting is not None else "x"
         args.direction = d
-        sub = plant[plant.output_labels.index(f"wp_{d}"), plant.input_labels.index(f"f_wp_{d}")]
-        return sub, f"{axis.name}: closed-loop wp.{d} compliance with {contact.note}", axis
+        return frd, f"{axis.name}: closed-loop wp.{d} compliance with {contact.note}", axis
     if args.frf:
         return chatter.read_frf_csv(args.frf), f"measured FRF {args.frf}", None
     if not modes:
