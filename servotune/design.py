@@ -323,7 +323,7 @@ class ModePeaks:
     frequencies : numpy.ndarray
         (modes, len(c)) natural frequency [rad/s] of each tracked closed-loop mode.
     peaks : numpy.ndarray
-        (modes, len(c)) peak of the mode's own term of the compliance, 2 |R|/|Re lambda|
+        (modes, len(c)) peak of the mode's own term of the compliance, |R|/|Re lambda|
         [m/N]; NaN where the mode's track has ended.
     c_best : numpy.ndarray
         The C [N s/m] that minimises each mode's peak on the grid.
@@ -373,7 +373,7 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
     """Track the closed-loop modes that move the work piece as C varies.
 
     For each C the closed-loop plant (``viscous`` pads, the drive) is put in modal form,
-    ``H(s) = sum_i R_i / (s - lambda_i)``; a mode's own peak is ``2 |R_i| / |Re lambda_i|``
+    ``H(s) = sum_i R_i / (s - lambda_i)``; a mode's own peak is ``|R_i| / |Re lambda_i|``
     (its pair's term at resonance). The modes are chosen at the design's C (the ``keep``
     largest peaks below ``f_max_hz`` that reach ``significance`` times the largest) and
     followed outwards in C by the nearest pole; a mode that turns over-damped or jumps by more
@@ -417,7 +417,9 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
         res = (sub.C @ v).ravel() * np.linalg.solve(v, sub.B).ravel()
         sel = (lam.imag > 0) & (lam.imag * HZ_PER_RAD_S < f_max_hz)
         poles.append(lam[sel])
-        peaks.append(2 * np.abs(res[sel]) / np.maximum(np.abs(lam[sel].real), 1e-300))
+        # at s = j Im(lambda) the mode's own term R / (s - lambda) is R / (-Re lambda); its
+        # conjugate's term is small when the mode is lightly damped
+        peaks.append(np.abs(res[sel]) / np.maximum(np.abs(lam[sel].real), 1e-300))
     start = int(np.argmin(np.abs(np.log(c_values / chosen))))
     p0 = peaks[start]
     order = [i for i in np.argsort(-p0)[:keep] if p0[i] >= significance * p0.max()]

@@ -108,9 +108,6 @@ def test_mode_tracks_of_the_two_mass_system_end_at_the_closed_form_frequencies()
                     [math.sqrt(K * (M1 + m2) / (M1 * m2)), math.sqrt(K / m2)], rtol=1e-6)
 
 
-@pytest.mark.xfail(strict=True, reason="servotune.design.mode_peaks_vs_damping takes a mode's "
-                   "peak as 2 |R| / |Re lambda|; the pair R/(s - lambda) + conj at s = j Im "
-                   "lambda gives |R| / |Re lambda|: its peaks are twice the compliance")
 def test_mode_peak_of_a_lightly_damped_two_mass_system_is_its_compliance_peak():
     # reference: the closed-form x2/f2 of the paper's sec 4.1 near the single light mode
     c = 4.912e3  # Copt / 100: 1.6 % damping, one isolated peak
