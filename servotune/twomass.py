@@ -103,7 +103,7 @@ class TwoMassSystem:
                                                     unit))
         layout = str(self.layout).upper()
         if layout not in LAYOUTS:
-            raise ValueError(f"layout must be 'A' or 'B', got {self.layout!r}")
+            raise ValueError(f"TwoMassSystem.layout must be 'A' or 'B', got {self.layout!r}")
         object.__setattr__(self, "layout", layout)
 
     @property

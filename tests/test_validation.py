@@ -119,6 +119,13 @@ def test_design_keeps_good_values():
     (lambda: MillingSetup.from_ratio(2, kt=6e8, kr=-0.3), r"MillingSetup\.from_ratio\.kr"),
     (lambda: TwoMassSystem(m1=0.0, k=16e6, alpha=0.3), r"TwoMassSystem\.m1 .* kg, got 0\.0"),
     (lambda: TwoMassSystem(m1=5e3, k=INF, alpha=0.3), r"TwoMassSystem\.k .* N/m, got inf"),
+    (lambda: TwoMassSystem(m1=5e3, k=1e6, alpha=0.3, layout="C"), r"TwoMassSystem\.layout"),
+    (lambda: MillingSetup(2.5, kt=6e8, kn=2e8), r"MillingSetup\.teeth must be a whole number"),
+    (lambda: MillingSetup(2, kt=6e8, kn=2e8, milling="side"), r"MillingSetup\.milling"),
+    (lambda: ModalModel(np.eye(2), np.eye(2), ["a", "a"]),
+     r"ModalModel\.dofs has duplicate DOF names \['a'\]"),
+    (lambda: ModalModel(np.eye(1), np.eye(1), ["a"]).with_added(damping={"a": -2.0}),
+     r"ModalModel\.with_added\.damping\['a'\] must be finite and >= 0 N s/m, got -2\.0"),
 ])
 def test_value_types_refuse_bad_values_by_name(build, message):
     with pytest.raises(ValueError, match=message):

@@ -124,7 +124,7 @@ class MillingSetup:
     def __post_init__(self) -> None:
         teeth = self.teeth
         if isinstance(teeth, bool) or not float(teeth).is_integer() or teeth < 1:
-            raise ValueError(f"teeth must be a whole number >= 1, got {teeth!r}")
+            raise ValueError(f"MillingSetup.teeth must be a whole number >= 1, got {teeth!r}")
         object.__setattr__(self, "teeth", int(teeth))
         object.__setattr__(self, "kt", positive("MillingSetup", "kt", self.kt, "N/m^2",
                                                 "give the tangential cutting coefficient K_t"))
@@ -139,12 +139,12 @@ class MillingSetup:
         object.__setattr__(self, "radial_immersion", ae)
         milling = str(self.milling).lower()
         if milling not in MILLING_MODES:
-            raise ValueError(f"milling must be 'down' or 'up', got {self.milling!r}")
+            raise ValueError(f"MillingSetup.milling must be 'down' or 'up', got {self.milling!r}")
         object.__setattr__(self, "milling", milling)
         helix = positive("MillingSetup", "helix_angle", self.helix_angle, "rad",
                          allow_zero=True)
         if helix >= math.pi / 2:
-            raise ValueError(f"helix_angle must be in [0, pi/2) rad, got {helix!r}")
+            raise ValueError(f"MillingSetup.helix_angle must be in [0, pi/2) rad, got {helix!r}")
         object.__setattr__(self, "helix_angle", helix)
 
     @classmethod

@@ -36,6 +36,8 @@ import control
 import numpy as np
 import scipy.linalg
 
+from ..validation import positive
+
 __all__ = ["ModalModel", "ReductionInfo", "UnknownDofError", "signal_name"]
 
 SYMMETRY_TOLERANCE = 1e-8  # relative to the largest entry
@@ -221,10 +223,10 @@ class ModalModel:
         dofs = tuple(str(d) for d in self.dofs)
         if len(set(dofs)) != len(dofs):
             dup = sorted({d for d in dofs if dofs.count(d) > 1})
-            raise ValueError(f"duplicate DOF names: {dup}")
+            raise ValueError(f"ModalModel.dofs has duplicate DOF names {dup}; name each DOF once")
         n = len(dofs)
         if n == 0:
-            raise ValueError("a model needs at least one DOF")
+            raise ValueError("ModalModel.dofs is empty: a model needs at least one DOF")
         m = _check_matrix("mass", self.mass, n)
         k = _check_matrix("stiffness", self.stiffness, n)
         try:
@@ -426,14 +428,14 @@ class ModalModel:
         """
         k = self.stiffness.copy()
         d = self.damping.copy()
-        for target, extra in ((k, stiffness), (d, damping)):
+        for target, extra, what, unit in ((k, stiffness, "stiffness", "N/m"),
+                                          (d, damping, "damping", "N s/m")):
             if extra is None:
                 continue
             if isinstance(extra, dict):
                 for name, value in extra.items():
-                    if not np.isfinite(value) or value < 0:
-                        raise ValueError(f"added element at {name!r} must be finite and >= 0, "
-                                         f"got {value!r}")
+                    value = positive("ModalModel.with_added", f"{what}[{name!r}]", value, unit,
+                                     allow_zero=True)
                     i = int(self.index(name))
                     target[i, i] += value
             else:
