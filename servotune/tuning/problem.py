@@ -76,17 +76,56 @@ class ChatterTarget:
 
     @classmethod
     def from_setup(cls, setup, direction: str = "x", required_depth: float | None = None):
-        """From a :class:`~servotune.chatter.MillingSetup` (flexible direction ``x`` or ``y``)."""
+        """Return the target of a milling set-up with one flexible direction.
+
+        Parameters
+        ----------
+        setup : servotune.chatter.MillingSetup
+            The milling set-up (its Kt and engagement).
+        direction : {"x", "y"}
+            The flexible direction; mu is its directional factor
+            (:func:`servotune.chatter.directional_factor`).
+        required_depth : float, optional
+            Required axial depth of cut [m].
+
+        Returns
+        -------
+        ChatterTarget
+            ``kt`` of the set-up, ``mu`` of the direction.
+        """
         from ..chatter import directional_factor
 
         return cls(setup.kt, directional_factor(setup, direction), required_depth)
 
     def b_crit(self, min_real: float) -> float:
-        """b_crit [m] from the most negative real part of the ORIENTED FRF mu G [m/N]."""
+        """Return the absolute chatter limit b_crit = -1 / (2 Kt min_w Re(mu G)).
+
+        Parameters
+        ----------
+        min_real : float
+            The most negative real part of the ORIENTED FRF mu G [m/N].
+
+        Returns
+        -------
+        float
+            b_crit [m]; inf when ``min_real >= 0`` (no chatter at any depth).
+        """
         return math.inf if min_real >= 0 else -1.0 / (2.0 * self.kt * min_real)
 
     def margin(self, b_crit: float) -> float | None:
-        """b_crit over the required depth (None without a requirement)."""
+        """Return b_crit over the required depth.
+
+        Parameters
+        ----------
+        b_crit : float
+            Absolute chatter limit [m].
+
+        Returns
+        -------
+        float or None
+            The margin [-] (above 1: the required depth is chatter-free); None without a
+            required depth.
+        """
         return None if self.required_depth is None else b_crit / self.required_depth
 
 
@@ -134,6 +173,7 @@ class TuningProblem:
     Parameters
     ----------
     structure : ModalModel
+        The structure (with the pad and force DOFs).
     pads : sequence of str
         Pad DOFs where the guide-way damping C acts (shared equally).
     c : float
@@ -145,7 +185,9 @@ class TuningProblem:
     bounds : dict, optional
         ``{name: (low, high)}`` in SI; defaults: a factor 100 either way of the initial value.
     requirements : Requirements
+        Robustness and performance requirements.
     chatter : ChatterTarget, optional
+        The chatter-limit objective (needed by a chatter weight > 0).
     weights : (float, float)
         Weights of (compliance peak / initial peak, initial b_crit / b_crit) in the objective.
     tracking_weight : float
@@ -170,6 +212,17 @@ class TuningProblem:
         Work-piece DOF where the cutting force acts and the compliance is taken.
     n_grid : int
         Initial number of grid frequencies (the exchange refinement adds more).
+
+    Raises
+    ------
+    ValueError
+        If the regime models are empty or not RegimeModel, friction models or a free C have
+        no pads, a weight is negative or not finite (or both objective weights are zero), a
+        variable is unknown or needs a missing drive, nothing is free, a chatter weight has
+        no ChatterTarget, the initial C is negative (or not > 0 when free), or the bounds of
+        a free variable do not hold its initial value (``0 < low <= initial <= high``).
+    servotune.structure.model.UnknownDofError
+        If a pad or the force DOF is not a DOF of the structure.
     """
 
     structure: ModalModel
@@ -261,13 +314,32 @@ class TuningProblem:
         return lo, max(top - lo, 0.01 * lo)
 
     def initial_design(self) -> Design:
+        """Return the initial design: C and, with a drive, its Kv, velocity Kp and Ti.
+
+        Returns
+        -------
+        Design
+            The design the tuning starts from (the "before" design).
+        """
         d = self.drive
         if d is None:
             return Design(c=float(self.c))
         return Design(c=float(self.c), kv=d.kv, kp=d.velocity_loop.kp, ti=d.velocity_loop.ti)
 
     def drive_for(self, design: Design) -> Drive | None:
-        """The drive with a design's gains."""
+        """Return the drive with a design's gains.
+
+        Parameters
+        ----------
+        design : Design
+            The design (its Kv, Kp and Ti; set them all when the problem has a drive).
+
+        Returns
+        -------
+        Drive or None
+            The problem's drive with Kv and the velocity PI of the design; None without a
+            drive.
+        """
         if self.drive is None:
             return None
         return replace(self.drive, kv=design.kv,
