@@ -137,7 +137,7 @@ class TuningSettings:
     ``friction_spread`` maps fc, fs, sigma1 (fractions) and sigma0 (a factor) to the spread of
     the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`);
     ``friction_samples`` are further samples ``(label, {parameter: value})``, e.g. a study's
-    worst (:func:`servotune.study.spread_from_study`, ``servotune tune --spread-from``).
+    worst (:func:`servotune.study.spread.spread_from_study`, ``servotune tune --spread-from``).
     """
 
     free: tuple[str, ...] = ("c", "kv", "kp", "ti")
@@ -280,7 +280,18 @@ class Axis:
         return self.require_drive().motor.rotor
 
     def require_drive(self) -> Drive:
-        """The drive, or a clear error naming the missing table."""
+        """Return the drive, or raise a clear error naming the missing table.
+
+        Returns
+        -------
+        Drive
+            The drive of ``[drive]``.
+
+        Raises
+        ------
+        AxisFormatError
+            If the description has no ``[drive]``.
+        """
         if self.drive is None:
             raise AxisFormatError(f"{self.file}: [drive] is missing; add [drive.motor], "
                                   "[drive.transmission], [drive.current_loop], "
@@ -289,15 +300,33 @@ class Axis:
         return self.drive
 
     def require_cutting(self) -> Cutting:
-        """The milling set-up, or a clear error naming the missing table."""
+        """Return the milling set-up, or raise a clear error naming the missing table.
+
+        Returns
+        -------
+        Cutting
+            The milling set-up of ``[cutting]``.
+
+        Raises
+        ------
+        AxisFormatError
+            If the description has no ``[cutting]``.
+        """
         if self.cutting is None:
             raise AxisFormatError(f"{self.file}: [cutting] is missing; add teeth, kt, kn, "
                                   "radial_immersion, milling and speed_rpm (see `servotune init`)")
         return self.cutting
 
     def with_continuous_drive(self) -> Axis:
-        """The axis with its drive in continuous time (no sampling, no delays): the paper's
-        model (sec 3: "continuous time elements"), for reproducing its results."""
+        """Return the axis with its drive in continuous time (no sampling, no delays).
+
+        The paper's model (sec 3: "continuous time elements"), for reproducing its results.
+
+        Returns
+        -------
+        Axis
+            A copy whose drive has continuous sampling; the axis itself when it has no drive.
+        """
         import dataclasses
 
         if self.drive is None:
@@ -306,9 +335,30 @@ class Axis:
             self, drive=dataclasses.replace(self.drive, sampling=Sampling.continuous()))
 
     def configuration(self, pads: str = "free", motor: str = "free") -> ModalModel:
-        """The structure with the guide-way pads and/or the motor rotor held (``"locked"``)
-        or free (``"free"``): pads locked is stiction at standstill, the rotor held stands for
-        a stiff servo."""
+        """Return the structure with the guide-way pads and/or the motor rotor held or free.
+
+        Pads locked is stiction at standstill; the rotor held stands for a stiff servo.
+
+        Parameters
+        ----------
+        pads : {"free", "locked"}
+            Whether the pad DOFs of ``[friction]`` are held.
+        motor : {"free", "locked"}
+            Whether the motor rotor DOF is held.
+
+        Returns
+        -------
+        ModalModel
+            The structure with the held DOFs removed (``ModalModel.locked``); the structure
+            itself when nothing is held.
+
+        Raises
+        ------
+        ValueError
+            If ``pads`` or ``motor`` is neither ``"locked"`` nor ``"free"``.
+        AxisFormatError
+            If pads are locked without ``[friction]``, or the motor without ``[drive]``.
+        """
         for label, value in (("pads", pads), ("motor", motor)):
             if value not in ("locked", "free"):
                 raise ValueError(f"{label} must be 'locked' or 'free', got {value!r}")
@@ -357,12 +407,20 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
 
 
 def structure_matrices(axis: Axis):
-    """The matrices of an axis' ``[structure]`` as read, with its ports named, before any
-    reduction: what a reduction on loading is checked against.
+    """Return the matrices of an axis' ``[structure]`` as read, with its ports named.
+
+    The matrices before any reduction: what a reduction on loading is checked against. The
+    data files are read again, relative to the axis' folder.
+
+    Parameters
+    ----------
+    axis : Axis
+        A loaded axis description.
 
     Returns
     -------
     servotune.structure.StructureMatrices
+        Mass and stiffness matrices [kg, N/m] (sparse) with their DOF names.
 
     Raises
     ------
@@ -1039,12 +1097,18 @@ def load_axis(path) -> Axis:
     Returns
     -------
     Axis
+        The checked description (see :func:`axis_from_tables`).
 
     Raises
     ------
     AxisFormatError
         A missing file, invalid TOML, an unknown section, a missing or wrong field, DOF names
         that the structure does not have.
+
+    See Also
+    --------
+    servotune.design.tune_axis : the design job on the loaded axis.
+    servotune.analysis.loop_report : the loops of the axis.
     """
     path = Path(path)
     file = path / "axis.toml" if path.is_dir() else path
@@ -1060,9 +1124,23 @@ def load_axis(path) -> Axis:
 
 
 def axis_from_tables(data: dict, file) -> Axis:
-    """An axis from the tables of an ``axis.toml`` already read (a dict as :mod:`tomllib`
-    gives it), with ``file`` the path it stands for: data files are relative to its folder and
-    errors name it. A study varies the tables and builds each sample's axis this way.
+    """Return an axis from the tables of an ``axis.toml`` already read.
+
+    A study varies the tables and builds each sample's axis this way. Values left out take
+    their defaults, each noted in ``Axis.defaults``.
+
+    Parameters
+    ----------
+    data : dict
+        The tables as :mod:`tomllib` gives them.
+    file : path-like
+        The ``axis.toml`` the tables stand for: data files are relative to its folder and
+        errors name it.
+
+    Returns
+    -------
+    Axis
+        The checked description; its ``path`` is the resolved folder of ``file``.
 
     Raises
     ------
