@@ -475,12 +475,32 @@ def test_verify_flags_state_their_range_in_the_help(flag, accepted):
     assert accepted in " ".join(action.help.split())
 
 
-def test_compliance_flags_that_fit_the_contact_still_work(tmp_path, capsys):
-    for flags in (["--contact", "sliding", "--speed", "0.03"],
-                  ["--contact", "equivalent", "--amplitude", "2e-6", "--frequency-hz", "50"]):
-        assert main(["compliance", str(MODELS / "paper_x_axis"), "--continuous", *flags,
-                     "--no-plots", "--json", "--out", str(tmp_path)]) == 0
-        assert json.loads(capsys.readouterr().out)["contact"] == flags[1]
+@pytest.mark.parametrize("flags, kind, parameters", [
+    (["--contact", "sliding", "--speed", "0.03"], "sliding", {"speed": 0.03}),
+    (["--contact", "equivalent", "--amplitude", "2e-6", "--frequency-hz", "50"], "equivalent",
+     {"amplitude": 2e-6, "frequency_hz": 50.0})])
+def test_compliance_flags_that_fit_the_contact_still_work(tmp_path, capsys, flags, kind,
+                                                          parameters):
+    # the peak the command reports for the contact its flags describe, against a second
+    # evaluation: python-control's own frequency response of that closed-loop plant, on a
+    # fine grid around the peak
+    import control
+
+    from servotune.analysis import axis_contact, axis_plant
+    from servotune.axis import load_axis
+
+    assert main(["compliance", str(MODELS / "paper_x_axis"), "--continuous", *flags,
+                 "--no-plots", "--json", "--out", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["contact"] == kind
+    axis = load_axis(MODELS / "paper_x_axis").with_continuous_drive()
+    plant = axis_plant(axis, axis_contact(axis, kind, **parameters))
+    sub = plant[plant.output_labels.index("wp_x"), plant.input_labels.index("f_wp_x")]
+    f_peak = out["peak_frequency_hz"]
+    omega = 2 * math.pi * np.linspace(0.97 * f_peak, 1.03 * f_peak, 2001)
+    response = np.abs(control.frequency_response(sub, omega).complex.ravel())
+    assert out["peak_compliance"] == pytest.approx(response.max(), rel=1e-4)
+    assert f_peak == pytest.approx(omega[np.argmax(response)] / (2 * math.pi), rel=1e-4)
 
 
 def test_axis_contact_names_its_own_parameters():
