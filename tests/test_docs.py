@@ -65,7 +65,7 @@ NOT_YET_CHECKED = (
     "servotune.contact_kinds", "servotune.frequency", "servotune.friction", "servotune.harmonic",
     "servotune.plant", "servotune.simulate.contact", "servotune.simulate.integrator",
     "servotune.simulate.simulator", "servotune.simulate.system", "servotune.tuning.nlp",
-    "servotune.tuning.problem", "servotune.tuning.solve",
+    "servotune.tuning.solve",
 )
 
 #: The entry points a reader starts from: See Also required, linking to one another.

@@ -163,6 +163,13 @@ class Design:
             object.__setattr__(self, name, value)
 
     def to_dict(self) -> dict:
+        """Return the design as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``{"c", "kv", "kp", "ti"}`` (SI; None for a variable without a drive).
+        """
         return {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
 
 
