@@ -197,3 +197,40 @@ def test_first_harmonic_of_the_periodic_force_is_the_lugre_describing_function(a
     ceq_ref, keq_ref = describing_function(p, amplitude, omega)
     assert_allclose(ceq, ceq_ref, rtol=2e-3)
     assert_allclose(keq, keq_ref, rtol=2e-3, atol=2e-3 * p.sigma0)
+
+
+def test_a_registered_contact_kind_reaches_the_analyses_and_the_command_line():
+    import argparse
+
+    from servotune import contact_kinds as registry
+    from servotune.analysis import axis_contact, compliance_curve
+    from servotune.axis import load_axis
+    from servotune.cli._common import CliError, add_contact_options, check_contact_args
+
+    def spring_only(friction, speed=None, **_):
+        return Contact("spring_only", stiffness=friction.law.presliding()[0],
+                       note=f"presliding spring alone (speed {speed})")
+
+    kind = registry.ContactKind("spring_only", "the presliding spring without its damper",
+                                spring_only, optional=("speed",))
+    registry.register_contact_kind(kind)
+    try:
+        axis = load_axis("models/paper_x_axis").with_continuous_drive()
+        contact = axis_contact(axis, "spring_only", speed=0.01)
+        assert contact.stiffness == axis.friction.lugre.sigma0 and contact.damping == 0.0
+        # the plant takes it as any spring contact: the same compliance as the stiction
+        # contact with its damper removed
+        reference = Contact("stiction", stiffness=axis.friction.lugre.sigma0)
+        omega = 2 * np.pi * np.array([20.0, 57.0, 300.0])
+        assert_allclose(compliance_curve(axis, contact, omega=omega).values,
+                        compliance_curve(axis, reference, omega=omega).values, rtol=1e-12)
+        with pytest.raises(ValueError, match="amplitude is a parameter of the 'equivalent'"):
+            axis_contact(axis, "spring_only", amplitude=1e-6)
+        parser = argparse.ArgumentParser()
+        add_contact_options(parser)
+        args = parser.parse_args(["--contact", "spring_only", "--speed", "0.01"])
+        check_contact_args(args)
+        with pytest.raises(CliError, match="--c sets the viscous damping"):
+            check_contact_args(parser.parse_args(["--contact", "spring_only", "--c", "5"]))
+    finally:
+        registry._CONTACT_KINDS.pop("spring_only", None)
