@@ -303,7 +303,8 @@ def two_mass_check(axis: Axis, result: TuningResult | None) -> TwoMassCheck | No
     -------
     TwoMassCheck or None
         None when the axis is no two-mass layout B (two DOFs, one pad, ``wp.x``, a single
-        spring between them and no mass coupling), or when there is no verified design.
+        spring between them and no mass coupling), or when the result has no check of the
+        tuned design (``result.after`` is None).
     """
     system = _two_mass_system(axis)
     if system is None or result is None or result.after is None:
