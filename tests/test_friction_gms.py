@@ -305,3 +305,36 @@ def test_bundled_axis_simulated_with_gms_keeps_to_the_periodic_orbit():
         assert err.max() < 0.05 * share
         assert np.sqrt(np.mean(err**2)) < 0.01 * share
         assert np.abs(force).max() > 0.95 * share          # the pads slide: all elements slip
+
+
+def test_simulation_with_four_remainders_per_pad_matches_lsoda():
+    # the integrator with one remainder per element (8 on two pads) against LSODA on the same
+    # equations (linear part of axis_system, remainders of the law), the pads slipping
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from axis_fixtures import PADS, small_axis, small_drive
+
+    from servotune.simulate import NonlinearAxis, axis_system, simulate, sine_sweep
+
+    law = GMSFriction(P_DAMPED)
+    drive = small_drive(velocity_feedforward=1.0)
+    scenario = sine_sweep(20000.0, 40.0, 40.0, 0.05)
+    run = simulate(NonlinearAxis(small_axis(), drive, PADS, law), scenario, record_step=2.5e-4)
+    sysm = axis_system(small_axis(), drive, law, PADS, 0.0, inputs=["f_wp_x", "one"])
+    a, b = sysm.system.A, sysm.system.B
+    params = law.remainder_parameters(0.0)
+    force = scenario.forces["wp.x"]
+
+    def rhs(t, x):
+        v, z = sysm.remainder_velocity @ x, sysm.remainder_state @ x
+        r = [gms_remainder(k // len(PADS), v[k], z[k], params)[0] for k in range(v.size)]
+        return a @ x + b[:, 0] * float(force(t)) + b[:, 1] + b[:, 2:] @ np.array(r)
+
+    sol = solve_ivp(rhs, (0.0, 0.05), np.zeros(a.shape[0]), method="LSODA", rtol=1e-9,
+                    atol=1e-15, t_eval=run.t)
+    wp = sysm.system.C[sysm.outputs.index("wp_x")] @ sol.y
+    # element 1 slips (its deflection reaches its slip level)
+    assert np.abs(run.signals["z1_pad1_x"]).max() > 0.9 * P_DAMPED.slip_deflections()[0]
+    assert_allclose(run.signals["wp_x"], wp, atol=1e-3 * np.abs(wp).max())
