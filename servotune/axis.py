@@ -100,7 +100,14 @@ def _frozen(value):
 @dataclass(frozen=True)
 class Cutting:
     """The milling set-up of an axis, the spindle-speed range of interest [rpm] and the feed
-    per tooth [m]."""
+    per tooth [m].
+
+    Raises
+    ------
+    ValueError
+        A setup that is not a MillingSetup, speeds that are not 0 < low < high, a direction
+        other than "x" or "y", a feed per tooth that is not finite and > 0.
+    """
 
     setup: MillingSetup
     speed_rpm: tuple[float, float] = (1000.0, 12000.0)
@@ -138,6 +145,13 @@ class TuningSettings:
     the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`);
     ``friction_samples`` are further samples ``(label, {parameter: value})``, e.g. a study's
     worst (:func:`servotune.study.spread.spread_from_study`, ``servotune tune --spread-from``).
+
+    Raises
+    ------
+    ValueError
+        Free names that are not distinct names among c, kv, kp, ti; bounds that are not
+        0 < low < high; a chatter weight outside [0, 1]; a spread or samples that
+        :func:`servotune.regimes.friction_samples` refuses.
     """
 
     free: tuple[str, ...] = ("c", "kv", "kp", "ti")
@@ -207,6 +221,12 @@ class Axis:
         The raw TOML tables, read-only.
     defaults : tuple of str
         One line for each value that was not given and took a default (shown with results).
+
+    Raises
+    ------
+    ValueError
+        A part of the wrong type, or a pad, motor or encoder DOF that the structure does not
+        have (built in Python; :func:`load_axis` names the file and field instead).
     """
 
     name: str
