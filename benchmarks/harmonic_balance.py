@@ -5,7 +5,7 @@ continuous drive, LuGre at the four pads) over 10-100 Hz at one force level (def
 to peak, standing still).
 
 * servotune: :func:`servotune.harmonic.nonlinear_compliance` (9 harmonics, 128 AFT samples,
-  arc-length continuation with the peak refined), the best of ``--repeat`` calls after one
+  arc-length continuation with the peak refined), the best of ``--repeat`` (5) calls after one
   warm-up call (numba's kernels loaded from its cache).
 * baseline: the same curve by the time simulation (:func:`servotune.simulate.simulate`) as a
   stepped sine (:func:`servotune.harmonic.stepped.stepped_sine`): at each frequency of the
@@ -63,7 +63,7 @@ def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--force-pp", type=float, default=600.0)
     parser.add_argument("--speed", type=float, default=0.0)
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--table3", action="store_true")
     args = parser.parse_args(argv)

@@ -115,6 +115,22 @@ def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="period"):
         lugre_periodic_force(PAPER, np.zeros(8), 0.0)
     with pytest.raises(ValueError, match="1-D"):
-        lugre_periodic_force(PAPER, np.zeros((2, 8)), 0.1)
+        lugre_periodic_force(PAPER, np.zeros((2, 2, 8)), 0.1)
+    with pytest.raises(ValueError, match="finite"):
+        lugre_periodic_force(PAPER, np.array([0.0, np.nan]), 0.1)
+
+
+def test_rows_are_contacts_of_their_own():
+    rng = np.random.default_rng(3)
+    v = 1e-4 * rng.standard_normal((3, 64))
+    p = PAPER.scaled(0.25)
+    assert_allclose(lugre_periodic_force(p, v, 0.02),
+                    [lugre_periodic_force(p, row, 0.02) for row in v], rtol=1e-14, atol=1e-12)
+    basis = rng.standard_normal((64, 5))
+    f, jac = lugre_periodic_jacobian(p, v, 0.02, basis)
+    for row, fr, jr in zip(v, f, jac, strict=True):
+        f1, j1 = lugre_periodic_jacobian(p, row, 0.02, basis)
+        assert_allclose(fr, f1, rtol=1e-14, atol=1e-12)
+        assert_allclose(jr, j1, rtol=1e-12, atol=1e-12 * np.abs(j1).max())
     with pytest.raises(TypeError, match="LuGreParameters"):
         lugre_periodic_force({"fc": 1.0}, np.zeros(8), 0.1)

@@ -183,6 +183,19 @@ def _periodic_jacobian(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basi
             out[i, k] = dfdz * w[k] + direct * basis[i, k]
             w[k] = e_step[i] * w[k] + c_step[i] * bu[i, k]
 
+@numba.njit(cache=True)
+def _orbit_rows(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z, force):
+    for r in range(v.shape[0]):
+        _periodic_orbit(v[r], h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z[r], force[r])
+
+
+@numba.njit(cache=True)
+def _jacobian_rows(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basis, force, out):
+    for r in range(v.shape[0]):
+        _periodic_jacobian(v[r], h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basis,
+                           force[r], out[r])
+
+
 def _prepare(params, velocity, period):
     if not isinstance(params, LuGreParameters):
         raise TypeError("params must be LuGreParameters (axis total or one pad's share), e.g. "
@@ -191,12 +204,12 @@ def _prepare(params, velocity, period):
     if not (math.isfinite(period) and period > 0.0):
         raise ValueError(f"period must be finite and > 0 s, got {period!r}")
     v = np.ascontiguousarray(velocity, dtype=float)
-    if v.ndim != 1 or v.size < 2:
+    if v.ndim not in (1, 2) or v.shape[-1] < 2:
         raise ValueError("velocity must be a 1-D array of at least 2 samples over one period "
-                         f"[m/s], got shape {v.shape}")
-    if not np.all(np.isfinite(v)):
+                         f"[m/s] (or 2-D, one such row per contact), got shape {v.shape}")
+    if not math.isfinite(float(np.sum(v))):
         raise ValueError("velocity samples must be finite")
-    return v, period / v.size
+    return v, period / v.shape[-1]
 
 
 def lugre_periodic_state(params: LuGreParameters, velocity, period: float
@@ -208,16 +221,17 @@ def lugre_periodic_state(params: LuGreParameters, velocity, period: float
     params : LuGreParameters
         Friction of the contact (axis total, or one pad's share from
         :meth:`LuGreParameters.scaled`).
-    velocity : array_like, shape (N,)
-        Sliding velocity [m/s] at the N equally spaced instants ``t_i = i T / N`` of one period.
+    velocity : array_like, shape (N,) or (n, N)
+        Sliding velocity [m/s] at the N equally spaced instants ``t_i = i T / N`` of one period
+        (a row per contact for n contacts with the same parameters).
     period : float
         The period T [s].
 
     Returns
     -------
-    z : numpy.ndarray, shape (N,)
+    z : numpy.ndarray, shape of ``velocity``
         Bristle deflection [m] at the instants.
-    force : numpy.ndarray, shape (N,)
+    force : numpy.ndarray, shape of ``velocity``
         Friction force [N] at the instants (positive along positive velocity).
 
     Raises
@@ -242,7 +256,8 @@ def lugre_periodic_state(params: LuGreParameters, velocity, period: float
     vd = -1.0 if p.sigma1_decay_speed is None else float(p.sigma1_decay_speed)
     z = np.empty_like(v)
     force = np.empty_like(v)
-    _periodic_orbit(v, h, p.sigma0, p.sigma1, p.sigma2, p.fc, p.fs, p.vs, p.delta, vd, z, force)
+    _orbit_rows(np.atleast_2d(v), h, p.sigma0, p.sigma1, p.sigma2, p.fc, p.fs, p.vs, p.delta,
+                vd, np.atleast_2d(z), np.atleast_2d(force))
     return z, force
 
 
@@ -253,14 +268,15 @@ def lugre_periodic_force(params: LuGreParameters, velocity, period: float) -> np
     ----------
     params : LuGreParameters
         Friction of the contact (axis total, or one pad's share).
-    velocity : array_like, shape (N,)
-        Sliding velocity [m/s] at N equally spaced instants over one period.
+    velocity : array_like, shape (N,) or (n, N)
+        Sliding velocity [m/s] at N equally spaced instants over one period (a row per
+        contact).
     period : float
         The period [s].
 
     Returns
     -------
-    numpy.ndarray, shape (N,)
+    numpy.ndarray, shape of ``velocity``
         The friction force at the same instants, on the periodic orbit of the bristle state.
 
     Raises
@@ -301,8 +317,9 @@ def lugre_periodic_jacobian(params: LuGreParameters, velocity, period: float, ba
     ----------
     params : LuGreParameters
         Friction of the contact (axis total, or one pad's share).
-    velocity : array_like, shape (N,)
-        Sliding velocity [m/s] at N equally spaced instants over one period.
+    velocity : array_like, shape (N,) or (n, N)
+        Sliding velocity [m/s] at N equally spaced instants over one period (a row per
+        contact).
     period : float
         The period [s].
     basis : array_like, shape (N, m), optional
@@ -311,9 +328,9 @@ def lugre_periodic_jacobian(params: LuGreParameters, velocity, period: float, ba
 
     Returns
     -------
-    force : numpy.ndarray, shape (N,)
+    force : numpy.ndarray, shape of ``velocity``
         As :func:`lugre_periodic_force`.
-    jacobian : numpy.ndarray, shape (N, m)
+    jacobian : numpy.ndarray, shape (N, m) or (n, N, m)
         ``(dF_i / dv_l) @ basis`` [N s/m] of the discrete scheme (exact derivatives of the
         exponential steps and of the periodicity condition ``z_0 = psi / (1 - Phi)``).
 
@@ -337,11 +354,12 @@ def lugre_periodic_jacobian(params: LuGreParameters, velocity, period: float, ba
     v, h = _prepare(params, velocity, period)
     p = params
     vd = -1.0 if p.sigma1_decay_speed is None else float(p.sigma1_decay_speed)
-    basis = np.eye(v.size) if basis is None else np.ascontiguousarray(basis, dtype=float)
-    if basis.ndim != 2 or basis.shape[0] != v.size:
-        raise ValueError(f"basis must have shape (N, m) with N = {v.size}, got {basis.shape}")
+    n = v.shape[-1]
+    basis = np.eye(n) if basis is None else np.ascontiguousarray(basis, dtype=float)
+    if basis.ndim != 2 or basis.shape[0] != n:
+        raise ValueError(f"basis must have shape (N, m) with N = {n}, got {basis.shape}")
     force = np.empty_like(v)
-    jac = np.empty((v.size, basis.shape[1]))
-    _periodic_jacobian(v, h, p.sigma0, p.sigma1, p.sigma2, p.fc, p.fs, p.vs, p.delta, vd,
-                       basis, force, jac)
+    jac = np.empty((*v.shape, basis.shape[1]))
+    _jacobian_rows(np.atleast_2d(v), h, p.sigma0, p.sigma1, p.sigma2, p.fc, p.fs, p.vs,
+                   p.delta, vd, basis, np.atleast_2d(force), jac.reshape(-1, n, basis.shape[1]))
     return force, jac

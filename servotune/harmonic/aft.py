@@ -46,8 +46,9 @@ def periodic_friction_force(law, velocity, period: float, share: float = 1.0) ->
         :class:`servotune.simulate.LuGreFriction` or :class:`LuGreParameters` (axis totals;
         :func:`~servotune.friction.periodic.lugre_periodic_force`), or a
         :class:`servotune.simulate.ViscousFriction` (``F = c v``).
-    velocity : array_like, shape (N,)
-        Pad sliding velocity [m/s] at N equally spaced instants over one period.
+    velocity : array_like, shape (N,) or (n, N)
+        Pad sliding velocity [m/s] at N equally spaced instants over one period (a row per
+        pad; a law's ``periodic_force`` is asked row by row).
     period : float
         The period [s].
     share : float
@@ -55,7 +56,7 @@ def periodic_friction_force(law, velocity, period: float, share: float = 1.0) ->
 
     Returns
     -------
-    numpy.ndarray, shape (N,)
+    numpy.ndarray, shape of ``velocity``
         The pad's friction force [N] at the instants (along positive velocity).
 
     Raises
@@ -77,7 +78,10 @@ def periodic_friction_force(law, velocity, period: float, share: float = 1.0) ->
     """
     method = getattr(law, "periodic_force", None)
     if callable(method):
-        return np.asarray(method(velocity, period, share=share), dtype=float)
+        v = np.asarray(velocity, dtype=float)
+        if v.ndim == 2:                       # the interface takes one contact at a time
+            return np.array([method(row, period, share=share) for row in v], dtype=float)
+        return np.asarray(method(v, period, share=share), dtype=float)
     params = law if isinstance(law, LuGreParameters) else getattr(law, "params", None)
     if isinstance(params, LuGreParameters):
         if share != 1.0:
@@ -104,7 +108,8 @@ def periodic_friction_jacobian(law, velocity, period: float, share: float = 1.0,
     Returns
     -------
     tuple of numpy.ndarray or None
-        ``(force (N,), dforce_dvelocity @ basis (N, m))``: from the law's
+        ``(force (N,), dforce_dvelocity @ basis (N, m))`` (with a leading pad axis for 2-D
+        velocities): from the law's
         ``periodic_force_jacobian(velocity, period, share=1.0)`` (times the basis) when it has
         one, from
         :func:`~servotune.friction.periodic.lugre_periodic_jacobian` for a LuGre law that
@@ -118,9 +123,12 @@ def periodic_friction_jacobian(law, velocity, period: float, share: float = 1.0,
     """
     method = getattr(law, "periodic_force_jacobian", None)
     if callable(method):
-        force, jac = method(velocity, period, share=share)
-        jac = np.asarray(jac, dtype=float)
-        return np.asarray(force, dtype=float), jac if basis is None else jac @ basis
+        v = np.asarray(velocity, dtype=float)
+        rows = [method(row, period, share=share) for row in np.atleast_2d(v)]
+        force = np.array([f for f, _ in rows], dtype=float)
+        jac = np.array([j for _, j in rows], dtype=float)
+        jac = jac if basis is None else jac @ basis
+        return (force, jac) if v.ndim == 2 else (force[0], jac[0])
     if callable(getattr(law, "periodic_force", None)):
         return None
     params = law if isinstance(law, LuGreParameters) else getattr(law, "params", None)
@@ -131,8 +139,9 @@ def periodic_friction_jacobian(law, velocity, period: float, share: float = 1.0,
     c = getattr(law, "c", None)
     if c is not None and not getattr(law, "nonlinear", False):
         v = np.asarray(velocity, dtype=float)
-        eye = np.eye(v.size) if basis is None else np.asarray(basis, dtype=float)
-        return float(c) * share * v, float(c) * share * eye
+        eye = np.eye(v.shape[-1]) if basis is None else np.asarray(basis, dtype=float)
+        return float(c) * share * v, np.broadcast_to(float(c) * share * eye,
+                                                     v.shape[:-1] + eye.shape).copy()
     return None
 
 

@@ -199,9 +199,7 @@ class PadBalance:
         """
         period = 2.0 * math.pi / omega
         v = samples_from_harmonics(1j * omega * self._k * x, self.samples, self.speed)
-        force = np.empty_like(v)
-        for p in range(self.n_pads):
-            force[p] = periodic_friction_force(self._pad_law, v[p], period, self._pad_share)
+        force = periodic_friction_force(self._pad_law, v, period, self._pad_share)
         return harmonics_from_samples(force, self.harmonics)[1]
 
     def _analytic_jacobian(self, x, omega: float):
@@ -209,17 +207,12 @@ class PadBalance:
         the law gives no derivative."""
         period = 2.0 * math.pi / omega
         v = samples_from_harmonics(1j * omega * self._k * x, self.samples, self.speed)
-        force = np.empty_like(v)
-        jac = np.empty((self.n_pads, 2 * self.harmonics, 2 * self.harmonics))
-        synthesis = omega * self._synthesis
-        for p in range(self.n_pads):
-            out = periodic_friction_jacobian(self._pad_law, v[p], period, self._pad_share,
-                                             synthesis)
-            if out is None:
-                return None
-            force[p] = out[0]
-            jac[p] = self._analysis @ out[1]
-        return harmonics_from_samples(force, self.harmonics)[1], jac
+        out = periodic_friction_jacobian(self._pad_law, v, period, self._pad_share,
+                                         omega * self._synthesis)
+        if out is None:
+            return None
+        force, dforce = out
+        return harmonics_from_samples(force, self.harmonics)[1], self._analysis @ dforce
 
     def _excitation(self, omega: float) -> np.ndarray:
         g = self._g(omega)
