@@ -94,7 +94,7 @@ def process_amplitude(axis: Axis, drive, c: float, force_pp: float,
     return max(amplitude, 1e-12), float(omega[i])
 
 
-def axis_regimes(axis: Axis, c: float | None = None, drive=None) -> tuple[RegimeModel, ...]:
+def axis_regimes(axis: Axis, c: float | None = None) -> tuple[RegimeModel, ...]:
     """Return the regime models of an axis (:func:`servotune.regimes.regime_models`).
 
     Without ``[drive]``, ``[friction]`` or ``[operation]``: the viscous pads alone (the paper's
@@ -111,9 +111,8 @@ def axis_regimes(axis: Axis, c: float | None = None, drive=None) -> tuple[Regime
         The axis description.
     c : float, optional
         Viscous guide-way damping C [N s/m] at which the process amplitude is computed;
-        default the axis' ``[friction] viscous``.
-    drive : Drive, optional
-        Not used: the process amplitude is computed on the structure without a motor.
+        default the axis' ``[friction] viscous``. (The process amplitude is computed on the
+        structure without a motor.)
 
     Returns
     -------
@@ -672,8 +671,7 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
 
 
-def check_design(axis: Axis, design: Design, simulate_before: bool = True,
-                 feed_speeds=None) -> TuningResult:
+def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
     """Return the checks of a given design without tuning.
 
     The axis' regime models, the dense linear check of the design and of the axis' own one
@@ -686,8 +684,6 @@ def check_design(axis: Axis, design: Design, simulate_before: bool = True,
         The axis description.
     design : Design
         The design to check.
-    simulate_before : bool
-        Not used: the checks are linear.
     feed_speeds : sequence of float, optional
         Feed speeds [m/s] at which the axis is judged feeding instead of its own
         ``[operation] feed_speeds`` (each gets its linear regime model, its claim and its

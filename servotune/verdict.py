@@ -311,6 +311,8 @@ def simulate_sweep(axis: NonlinearAxis, force_pp: float, band_hz, resonances, sp
     """
     import time
 
+    if max_passes < 1:
+        raise ValueError(f"simulate_sweep: max_passes must be >= 1, got {max_passes!r}")
     wall = time.perf_counter()
     step = min(2.5e-4, 1.0 / (16.0 * band_hz[1]))
     step = 2.5e-4 / math.ceil(2.5e-4 / step)
@@ -334,9 +336,11 @@ def simulate_sweep(axis: NonlinearAxis, force_pp: float, band_hz, resonances, sp
         if plan.in_slow_window(f_peak) or not math.isfinite(f_peak):
             break
         resonances.append((f_peak, 0.02))
-    i = int(np.argmin(np.abs(env.frequency - env.resonance)))
-    pads = [result.sweep_envelope(p.replace(".", "_"), t_min=settle) for p in axis.pads]
-    pad_amp = float(np.mean([p.amplitude[min(i, p.amplitude.size - 1)] for p in pads]))
+    # the pads' amplitude in the cycle of the work piece's resonance (same window, same cycle)
+    t_min = settle + 0.02 * plan.duration
+    pads = [result.sweep_envelope(p.replace(".", "_"), t_min=t_min) for p in axis.pads]
+    pad_amp = float(np.mean([p.amplitude[int(np.argmin(np.abs(p.frequency - env.resonance)))]
+                             for p in pads]))
     t = result.t
     y = result["wp_x"]
     t_end = scenario.duration - RING_DOWN

@@ -319,3 +319,22 @@ def test_huge_decay_speed_simulates_as_the_constant_sigma1():
                                LuGreFriction(huge)), sc)
     assert_allclose(b.work, a.work, rtol=1e-7, atol=1e-9 * np.abs(a.work).max())
     assert_allclose(b["wp_x"], a["wp_x"], rtol=1e-7, atol=1e-9 * np.abs(a["wp_x"]).max())
+
+
+def test_a_move_with_feedforwards_matches_the_scipy_reference():
+    # a constant-speed move: the references are zero where the scenario leaves them out
+    # (the acceleration once the speed is reached); both feed-forwards are on, so a reference
+    # read wrongly would drive the reference ODE away from the simulator
+    from servotune.simulate.scenario import constant_speed
+
+    drive = small_drive(velocity_feedforward=1.0, torque_feedforward_inertia=0.01)
+    axis = NonlinearAxis(small_axis(), drive, PADS, ViscousFriction(5578.0))
+    sc = constant_speed(0.03, 0.3)
+    ode = ode_model(axis, sc)
+    sol = solve_ivp(ode.rhs, (0, 0.3), np.zeros(ode.n), method="LSODA", rtol=1e-10,
+                    atol=1e-15, t_eval=[0.3])
+    r = simulate(axis, sc, step=2.5e-4, record_step=2.5e-4)
+    ref = ode.outputs(0.3, sol.y[:, -1])
+    for name in ("slide_x", "wp_x"):
+        assert_allclose(r[name][-1], ref[ode.output_names.index(name)], rtol=1e-5)
+    assert r["slide_x"][-1] > 0.003      # it moved: about 0.03 m/s for most of 0.3 s

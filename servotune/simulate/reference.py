@@ -100,7 +100,9 @@ def ode_model(axis: NonlinearAxis, scenario: Scenario) -> OdeModel:
 
     def inputs(t):
         s = scenario.signals(np.atleast_1d(float(t)))
-        return np.array([s[k][0] if k in s else 1.0 for k in sysm.inputs])
+        # a signal the scenario leaves out is zero at that instant; "one" is the constant 1
+        return np.array([s[k][0] if k in s else (1.0 if k == "one" else 0.0)
+                         for k in sysm.inputs])
 
     def w_of(x):
         if not nonlinear:
