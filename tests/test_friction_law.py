@@ -234,3 +234,25 @@ def test_a_registered_contact_kind_reaches_the_analyses_and_the_command_line():
             check_contact_args(parser.parse_args(["--contact", "spring_only", "--c", "5"]))
     finally:
         registry._CONTACT_KINDS.pop("spring_only", None)
+
+
+def test_kernels_of_older_sources_are_removed_after_a_day(toy_law, tmp_path):
+    import os
+    import time
+
+    from servotune.simulate.integrator import chunk_kernel
+
+    folder = tmp_path / "kernels"
+    (folder / "__pycache__").mkdir(parents=True)
+    old = folder / "_kernel_toymaxwell_toy_remainder_0123456789abcdef.py"
+    recent = folder / "_kernel_toymaxwell_toy_remainder_fedcba9876543210.py"
+    cached = folder / "__pycache__" / f"{old.stem}.integrate_chunk-1.py311.nbi"
+    for f in (old, recent, cached):
+        f.write_text("# a kernel of an older source\n")
+    two_days = time.time() - 2 * 86400
+    os.utime(old, (two_days, two_days))
+    kernel = chunk_kernel(friction_law("toymaxwell")(1.0e8).remainder())
+    assert kernel.py_func.__name__ == "integrate_chunk"
+    assert not old.exists() and not cached.exists()
+    assert recent.exists()                      # younger: maybe in use by a running process
+    assert len(list(folder.glob("_kernel_toymaxwell_toy_remainder_*.py"))) == 2

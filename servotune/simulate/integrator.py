@@ -58,6 +58,7 @@ import math
 import os
 import sys
 import textwrap
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -625,6 +626,21 @@ def _kernel_directory() -> Path:
                   f"{[str(c) for c in candidates]}; set SERVOTUNE_KERNEL_DIR")
 
 
+def _prune(folder: Path, current: Path, age: float = 86400.0) -> None:
+    """Remove the kernels of the same remainder built from older sources (unused for a day:
+    a process still running older code keeps its own), with numba's cache files of them."""
+    stem = current.stem.rsplit("_", 1)[0] + "_"
+    now = time.time()
+    for old in folder.glob(f"{stem}*.py"):
+        try:
+            if old != current and now - old.stat().st_mtime > age:
+                for cached in (folder / "__pycache__").glob(f"{old.stem}.*"):
+                    cached.unlink()
+                old.unlink()
+        except OSError:
+            pass
+
+
 def chunk_kernel(remainder=None):
     """The compiled :func:`integrate_chunk` of a friction law's remainder.
 
@@ -651,6 +667,7 @@ def chunk_kernel(remainder=None):
     remainder and of every compiled function it calls (found through their global names), and
     of the numba version: a changed or new law gets a new module and is compiled afresh, never
     served stale code. No law is listed anywhere: any registered law's remainder can be passed.
+    Kernels of the same remainder from older sources are removed once they are a day old.
     """
     remainder = _no_remainder if remainder is None else remainder
     if not isinstance(remainder, numba.core.dispatcher.Dispatcher):
@@ -678,11 +695,13 @@ def chunk_kernel(remainder=None):
             f"                                          _solve_small, _u_into)\n"
             f"from {module_name} import {func_name} as _remainder\n\n\n"
             f"@numba.njit(cache=True, fastmath=_FAST)\n{source}")
-    path = _kernel_directory() / f"_kernel_{tag}.py"
+    folder = _kernel_directory()
+    path = folder / f"_kernel_{tag}.py"
     if not path.exists() or path.read_text() != text:
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_text(text)
         os.replace(tmp, path)
+        _prune(folder, path)
     name = f"servotune_kernel_{tag}"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
