@@ -64,8 +64,7 @@ NOT_YET_CHECKED = (
     "servotune.analysis", "servotune.axis", "servotune.cli.nlcompliance",
     "servotune.contact_kinds", "servotune.frequency", "servotune.friction", "servotune.harmonic",
     "servotune.plant", "servotune.simulate.contact", "servotune.simulate.integrator",
-    "servotune.simulate.simulator", "servotune.simulate.system", "servotune.tuning.nlp",
-    "servotune.tuning.solve",
+    "servotune.simulate.simulator", "servotune.simulate.system",
 )
 
 #: The entry points a reader starts from: See Also required, linking to one another.
