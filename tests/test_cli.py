@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import two_mass_reference as ref
 
 from servotune.cli import COMMANDS, SUMMARIES, build_parser, main
 from servotune.cli._common import RunOutput, print_json, to_jsonable
@@ -17,29 +18,24 @@ from servotune.cli._common import RunOutput, print_json, to_jsonable
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
-M1, K, ALPHA = 5000.0, 16e6, 0.3  # the paper's Fig 5 (sec 4.1); M2 = alpha M1
-M2 = ALPHA * M1
-
-
 def test_twomass_json_matches_the_closed_forms_of_layout_b(tmp_path, capsys):
-    # ground --C-- M1 --K-- M2 (PAPER_NOTES sec 3): fixed points
-    # w0 sqrt((1 + a -/+ sqrt(1 + a^2)) / (2 a)), Copt = sqrt(K M1) f(a), peak g(a)/K at the
-    # second fixed point; the resonance is the free pair for C = 0, M2 on K for C -> inf
+    # ground --C-- M1 --K-- M2 (paper sec 4.1, written out in two_mass_reference): the fixed
+    # points, Copt, the peak g(a)/K at the second fixed point; the resonance is the free pair
+    # for C = 0, M2 on K for C -> inf
     assert main(["twomass", "--m1", "5000", "--k", "16e6", "--alpha", "0.3",
                  "--out", str(tmp_path), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    a, root, w0 = ALPHA, math.sqrt(1 + ALPHA**2), math.sqrt(K / M1)
-    fixed = [w0 * math.sqrt((1 + a - root) / (2 * a)), w0 * math.sqrt((1 + a + root) / (2 * a))]
     hz = 1.0 / (2 * math.pi)
-    np.testing.assert_allclose(result["fixed_points_hz"], np.array(fixed) * hz, rtol=1e-12)
-    np.testing.assert_allclose(result["c_opt"], math.sqrt(K * M1) * math.sqrt(
-        (3 * root + a - 1) / (2 * a * (a + root))), rtol=1e-10)
-    np.testing.assert_allclose(result["c_opt"], 4.912e5, rtol=1e-4)  # the paper's value
-    np.testing.assert_allclose(result["peak_compliance"], (1 - a + root) / a / K, rtol=1e-10)
+    fixed = np.array(ref.fixed_points())
+    np.testing.assert_allclose(result["fixed_points_hz"], fixed * hz, rtol=1e-12)
+    np.testing.assert_allclose(result["c_opt"], ref.c_opt(), rtol=1e-10)
+    np.testing.assert_allclose(result["c_opt"], ref.COPT_PAPER, rtol=1e-4)
+    np.testing.assert_allclose(result["peak_compliance"], ref.g() / ref.K, rtol=1e-10)
     np.testing.assert_allclose(result["peak_frequency_hz"], fixed[1] * hz, rtol=1e-10)
-    np.testing.assert_allclose(result["resonance_c0_hz"],
-                               math.sqrt(K * (M1 + M2) / (M1 * M2)) * hz, rtol=1e-12)
-    np.testing.assert_allclose(result["resonance_cinf_hz"], math.sqrt(K / M2) * hz, rtol=1e-12)
+    np.testing.assert_allclose(result["resonance_c0_hz"], hz * math.sqrt(
+        ref.K * (ref.M1 + ref.M2) / (ref.M1 * ref.M2)), rtol=1e-12)
+    np.testing.assert_allclose(result["resonance_cinf_hz"], math.sqrt(ref.K / ref.M2) * hz,
+                               rtol=1e-12)
     folder = tmp_path / "twomass_layout_B"
     assert result["folder"] == str(folder)
     assert [Path(f).name for f in result["figures"]] == ["fig5_compliance.png",
@@ -50,22 +46,24 @@ def test_twomass_json_matches_the_closed_forms_of_layout_b(tmp_path, capsys):
 
 
 def test_twomass_layout_a_matches_its_closed_forms_without_plots(tmp_path, capsys):
-    # ground --K-- M2 --C-- M1 (a Lanchester damper, PAPER_NOTES sec 3): one fixed point
+    # ground --K-- M2 --C-- M1 (a Lanchester damper, the reading of the paper's unreadable
+    # layout A figure that servotune.twomass documents): one fixed point
     # w^2 = 2 K / (M1 + 2 M2), Copt = sqrt(K M2) sqrt(2 / ((1 + a)(1 + 2 a))); |H| there is the
     # same for every C, so the C -> inf value 1 / |K - (M1 + M2) w^2|; the resonance is M2 on K
     # for C = 0 and M1 + M2 on K for C -> inf
     assert main(["twomass", "--layout", "A", "--no-plots", "--out", str(tmp_path),
                  "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    a, hz = ALPHA, 1.0 / (2 * math.pi)
-    wf = math.sqrt(2 * K / (M1 + 2 * M2))
+    a, hz = ref.ALPHA, 1.0 / (2 * math.pi)
+    m1, m2, k = ref.M1, ref.M2, ref.K
+    wf = math.sqrt(2 * k / (m1 + 2 * m2))
     np.testing.assert_allclose(result["fixed_points_hz"], [wf * hz], rtol=1e-12)
-    np.testing.assert_allclose(result["c_opt"], math.sqrt(K * M2) * math.sqrt(
+    np.testing.assert_allclose(result["c_opt"], math.sqrt(k * m2) * math.sqrt(
         2 / ((1 + a) * (1 + 2 * a))), rtol=1e-10)
-    np.testing.assert_allclose(result["peak_compliance"], 1 / abs(K - (M1 + M2) * wf**2),
+    np.testing.assert_allclose(result["peak_compliance"], 1 / abs(k - (m1 + m2) * wf**2),
                                rtol=1e-10)
-    np.testing.assert_allclose(result["resonance_c0_hz"], math.sqrt(K / M2) * hz, rtol=1e-12)
-    np.testing.assert_allclose(result["resonance_cinf_hz"], math.sqrt(K / (M1 + M2)) * hz,
+    np.testing.assert_allclose(result["resonance_c0_hz"], math.sqrt(k / m2) * hz, rtol=1e-12)
+    np.testing.assert_allclose(result["resonance_cinf_hz"], math.sqrt(k / (m1 + m2)) * hz,
                                rtol=1e-12)
     assert sorted(p.name for p in (tmp_path / "twomass_layout_A").iterdir()) == [
         ".servotune-run.json", "results.json"]
@@ -241,8 +239,8 @@ def test_modes_band_is_printed_in_hz(tmp_path, capsys):
     band = load_axis(MODELS / "two_mass_fig5").requirements.band
     np.testing.assert_allclose([low, high], np.array(band) / (2 * math.pi))
     # with the pad (M1) locked, M2 rings on K alone: one mode at sqrt(K / M2)
-    np.testing.assert_allclose(result["frequencies_hz"], [math.sqrt(K / M2) / (2 * math.pi)],
-                               rtol=1e-12)
+    np.testing.assert_allclose(result["frequencies_hz"],
+                               [math.sqrt(ref.K / ref.M2) / (2 * math.pi)], rtol=1e-12)
 
 
 def test_init_names_the_axis_after_its_folder(tmp_path, capsys):

@@ -8,6 +8,7 @@ from pathlib import Path
 import control
 import numpy as np
 import pytest
+import two_mass_reference as ref
 from numpy.testing import assert_allclose
 
 from servotune.axis import load_axis
@@ -18,36 +19,21 @@ from servotune.plant import loop_transfer
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
-M1, K, ALPHA = 5000.0, 16e6, 0.3  # the paper's Fig 5 system (sec 4.1)
-
-
-def _two_mass_h(omega, c, m1=M1, k=K, alpha=ALPHA):
-    """x2/f2 of ground --C-- M1 --K-- M2 = alpha M1 (the paper's sec 4.1, PAPER_NOTES sec 3)."""
-    w = np.asarray(omega, dtype=float)
-    return (k - m1 * w**2 + 1j * w * c) / (alpha * m1**2 * w**4 - (1 + alpha) * k * m1 * w**2
-                                           + 1j * w * c * (k - alpha * m1 * w**2))
-
-
 def test_tune_two_mass_reproduces_copt_and_g_alpha(tmp_path, capsys):
-    # paper sec 4.1, Fig 5: Copt = 4.912e5 N s/m (the paper's number), peak g(alpha)/K; the
-    # closed forms Copt = sqrt(K M1) f(alpha) and g(alpha) written out here (PAPER_NOTES sec 3)
+    # paper sec 4.1, Fig 5: Copt = 4.912e5 N s/m (the paper's number), peak g(alpha)/K (the
+    # closed forms written out in two_mass_reference)
     assert main(["tune", str(MODELS / "two_mass_fig5"), "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    a = ALPHA
-    root = math.sqrt(1 + a * a)
-    c_opt = math.sqrt(K * M1) * math.sqrt((3 * root + a - 1) / (2 * a * (a + root)))
-    g = (1 - a + root) / a
-    assert c_opt == pytest.approx(4.912e5, rel=1e-4)  # the closed form against the paper
+    assert ref.c_opt() == pytest.approx(ref.COPT_PAPER, rel=1e-4)  # closed form and paper agree
     assert out["verified"] is True
-    assert out["design"]["c"] == pytest.approx(c_opt, rel=1e-4)
-    assert out["c_opt_analytic"] == pytest.approx(4.912e5, rel=1e-4)
-    assert out["peak_compliance_after"] == pytest.approx(g / K, rel=1e-6)
+    assert out["design"]["c"] == pytest.approx(ref.c_opt(), rel=1e-4)
+    assert out["c_opt_analytic"] == pytest.approx(ref.COPT_PAPER, rel=1e-4)
+    assert out["peak_compliance_after"] == pytest.approx(ref.g() / ref.K, rel=1e-6)
     # the reported peak is the peak of the closed-form x2/f2 at the tuned C over w >= w_f1
     # (the band of the minimax optimum, excluding w -> 0 where |H| ~ 1/(w C))
-    w0 = math.sqrt(K / M1)
-    w_f1 = w0 * math.sqrt((1 + a - root) / (2 * a))
-    omega = np.linspace(w_f1, 4 * w0, 200_001)
-    h = np.abs(_two_mass_h(omega, out["design"]["c"]))
+    w_f1, w_f2 = ref.fixed_points()
+    omega = np.linspace(w_f1, 4 * w_f2, 200_001)
+    h = np.abs(ref.h(omega, out["design"]["c"]))
     assert out["peak_compliance_after"] == pytest.approx(h.max(), rel=1e-5)
 
 
@@ -102,10 +88,10 @@ def test_mode_tracks_of_the_two_mass_system_end_at_the_closed_form_frequencies()
     # with C -> inf M1 is held and M2 rings on K alone, w^2 = K / M2
     axis = load_axis(MODELS / "two_mass_fig5")
     peaks = mode_peaks_vs_damping(axis, [1.0, 1e10], c_chosen=4.912e3)
-    m2 = ALPHA * M1
     assert peaks.frequencies.shape[0] == 1  # one oscillating mode
     assert_allclose(peaks.frequencies[0, [0, -1]],
-                    [math.sqrt(K * (M1 + m2) / (M1 * m2)), math.sqrt(K / m2)], rtol=1e-6)
+                    [math.sqrt(ref.K * (ref.M1 + ref.M2) / (ref.M1 * ref.M2)),
+                     math.sqrt(ref.K / ref.M2)], rtol=1e-6)
 
 
 def test_mode_peak_of_a_lightly_damped_two_mass_system_is_its_compliance_peak():
@@ -114,4 +100,4 @@ def test_mode_peak_of_a_lightly_damped_two_mass_system_is_its_compliance_peak():
     axis = load_axis(MODELS / "two_mass_fig5")
     peaks = mode_peaks_vs_damping(axis, [c], c_chosen=c)
     omega = np.linspace(100.0, 130.0, 300_001)
-    assert peaks.peaks[0, 0] == pytest.approx(np.abs(_two_mass_h(omega, c)).max(), rel=0.02)
+    assert peaks.peaks[0, 0] == pytest.approx(np.abs(ref.h(omega, c)).max(), rel=0.02)

@@ -7,6 +7,7 @@ import math
 import control
 import numpy as np
 import pytest
+import two_mass_reference as ref
 from matplotlib.lines import Line2D
 from numpy.testing import assert_allclose
 
@@ -76,34 +77,30 @@ def test_g_alpha_figure_is_the_closed_form():
     (curve,) = _curves(ax)
     a = np.asarray(curve.get_xdata())
     assert a.min() > 0 and a.max() == pytest.approx(1.0)
-    assert_allclose(curve.get_ydata(), (1 - a + np.sqrt(1 + a * a)) / a, rtol=1e-12)
+    assert_allclose(curve.get_ydata(), [ref.g(x) for x in a], rtol=1e-12)
     (mark,) = [ln for ln in ax.get_lines() if ln.get_marker() == "o"]
-    assert_allclose(mark.get_ydata(), [(0.7 + math.sqrt(1.09)) / 0.3], rtol=1e-12)
+    assert_allclose(mark.get_ydata(), [ref.g(0.3)], rtol=1e-12)
     assert ax.get_xlabel().endswith("[-]") and ax.get_ylabel().endswith("[-]")
 
 
 def test_two_mass_figure_draws_the_closed_form_compliance_for_each_c():
-    # PAPER_NOTES sec 3: x2/f2 of ground --C-- M1 --K-- M2; five curves C = Copt 10^k
-    m1, k, alpha = 5000.0, 16e6, 0.3
-    analysis = twomass.analyse_two_mass(twomass.TwoMassSystem(m1=m1, k=k, alpha=alpha))
-    fig = plots.plot_two_mass_compliance(analysis, f_max_hz=25.0)
+    # x2/f2 of ground --C-- M1 --K-- M2 (paper sec 4.1); five curves C = Copt 10^k
+    system = twomass.TwoMassSystem(m1=ref.M1, k=ref.K, alpha=ref.ALPHA)
+    fig = plots.plot_two_mass_compliance(twomass.analyse_two_mass(system), f_max_hz=25.0)
     ax_mag, ax_ph = fig.axes[:2]
     curves = _curves(ax_mag)
     assert len(curves) == 5 and ax_mag.get_yscale() == "log"
-    root = math.sqrt(1 + alpha**2)
-    c_opt = math.sqrt(k * m1) * math.sqrt((3 * root + alpha - 1) / (2 * alpha * (alpha + root)))
     for i, line in enumerate(curves):
-        c = c_opt * 10.0 ** (i - 2)
+        c = ref.c_opt() * 10.0 ** (i - 2)
         w = 2 * math.pi * np.asarray(line.get_xdata())
-        h = (k - m1 * w**2 + 1j * w * c) / (alpha * m1**2 * w**4 - (1 + alpha) * k * m1 * w**2
-                                            + 1j * w * c * (k - alpha * m1 * w**2))
-        assert_allclose(line.get_ydata(), np.abs(h), rtol=1e-9)
+        assert_allclose(line.get_ydata(), np.abs(ref.h(w, c)), rtol=1e-9)
         assert f"C = {c:.3e} N s/m" in line.get_label()
-    # the fixed points, where every curve passes: w0 sqrt((1 + a -/+ sqrt(1 + a^2)) / (2 a))
-    w0 = math.sqrt(k / m1)
-    (fixed,) = [ln for ln in ax_mag.get_lines() if ln.get_marker() == "s"][:1]
-    expected = [w0 * math.sqrt((1 + alpha - root) / (2 * alpha)) * HZ_PER_RAD_S]
-    assert_allclose(fixed.get_xdata(), expected, rtol=1e-12)
+    # the fixed points, where every curve passes
+    fixed = [ln for ln in ax_mag.get_lines() if ln.get_marker() == "s"]
+    assert_allclose([ln.get_xdata()[0] for ln in fixed],
+                    np.array(ref.fixed_points()) * HZ_PER_RAD_S, rtol=1e-12)
+    assert_allclose([ln.get_ydata()[0] for ln in fixed],
+                    np.abs(ref.h(ref.fixed_points(), 10 * ref.c_opt())), rtol=1e-9)
     assert ax_mag.get_ylabel().endswith("[m/N]") and ax_ph.get_ylabel().endswith("[deg]")
     assert ax_ph.get_xlabel() == "frequency [Hz]"
 

@@ -2,7 +2,8 @@
 
 The job is the paper's two-mass system of sec 4.1 (Fig 5) tuned for C alone: every figure the
 report names is written and embedded byte for byte, the numbers of its tables are the job's and
-the closed forms of the paper (Copt = sqrt(K M1) f(alpha), peak g(alpha)/K, written out here),
+the closed forms of the paper (Copt = sqrt(K M1) f(alpha), peak g(alpha)/K, written out in
+two_mass_reference),
 odd names are escaped, and no file is overwritten unless asked.
 """
 
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import matplotlib.image
 import pytest
+import two_mass_reference as ref
 
 from servotune.axis import load_axis
 from servotune.design import tune_axis
@@ -30,10 +32,7 @@ from servotune.report import (
 )
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
-M1, K, ALPHA = 5000.0, 16e6, 0.3
-ROOT = math.sqrt(1 + ALPHA**2)
-C_OPT = math.sqrt(K * M1) * math.sqrt((3 * ROOT + ALPHA - 1) / (2 * ALPHA * (ALPHA + ROOT)))
-PEAK = (1 - ALPHA + ROOT) / ALPHA / K
+C_OPT, PEAK = ref.c_opt(), ref.g() / ref.K
 
 
 class _Page(HTMLParser):
@@ -124,7 +123,7 @@ def test_the_tables_hold_the_job_and_the_closed_forms(job, tmp_path):
         "Optimiser against the fixed-point theory (sec 4.1)"][1:]}
     closed, tuned, difference = (float(x) for x in two["Copt [N s/m]"])
     assert closed == pytest.approx(C_OPT, rel=1e-6)  # printed with 7 digits
-    assert closed == pytest.approx(4.912e5, rel=1e-4)  # the paper's Fig 5
+    assert closed == pytest.approx(ref.COPT_PAPER, rel=1e-4)  # the paper's Fig 5
     assert tuned == pytest.approx(job.design.c, rel=1e-6)
     assert difference == pytest.approx(job.design.c / C_OPT - 1, abs=1e-6)
     closed, tuned, _ = (float(x) for x in two["peak g(alpha)/K [m/N]"])
@@ -137,8 +136,8 @@ def test_the_tables_hold_the_job_and_the_closed_forms(job, tmp_path):
     peak_before, peak_after = (float(x) for x in design["worst compliance peak [m/N]"])
     assert peak_after == pytest.approx(PEAK, rel=5e-4)
     assert peak_before == pytest.approx(job.result.before.peak_compliance, rel=5e-4)
-    # the peak is at the second fixed point, w0 sqrt((1 + a + sqrt(1 + a^2)) / (2 a))
-    f2 = math.sqrt(K / M1) * math.sqrt((1 + ALPHA + ROOT) / (2 * ALPHA)) / (2 * math.pi)
+    # the peak is at the second fixed point
+    f2 = ref.fixed_points()[1] / (2 * math.pi)
     assert float(design["  at [Hz]"][1]) == pytest.approx(f2, abs=0.05)  # printed to 0.1 Hz
 
 
