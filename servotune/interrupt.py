@@ -190,8 +190,8 @@ def process_pool(workers: int) -> Iterator[object]:
 
 
 def casadi_iteration_callback(name: str = "servotune_interrupt", n_x: int = 0,
-                              n_g: int = 0):
-    """A casadi ``iteration_callback`` that asks IPOPT to stop when Ctrl-C was pressed.
+                              n_g: int = 0, stop=None):
+    """Return a casadi ``iteration_callback`` that asks IPOPT to stop when Ctrl-C was pressed.
 
     casadi's IPOPT interface already stops on Ctrl-C by itself; this callback also stops it
     when the flag was set elsewhere (another thread, a worker that reported an interruption).
@@ -203,12 +203,16 @@ def casadi_iteration_callback(name: str = "servotune_interrupt", n_x: int = 0,
     name : str
         Name of the casadi function.
     n_x, n_g : int
-        Number of variables and constraints of the NLP.
+        Number of variables and constraints of the NLP (0: the callback does not read them).
+    stop : callable, optional
+        Called at every iteration without arguments; a true result stops IPOPT too (e.g. an
+        iteration limit per solve).
 
     Returns
     -------
     casadi.Callback
-        The callback; it returns 1 (stop) once the interruption flag is set, else 0.
+        The callback; it returns 1 (stop) once the interruption flag is set or ``stop()`` is
+        true, else 0.
     """
     import casadi as ca
 
@@ -240,6 +244,6 @@ def casadi_iteration_callback(name: str = "servotune_interrupt", n_x: int = 0,
             return ca.Sparsity(0, 0)
 
         def eval(self, arg):
-            return [1 if _flag.is_set() else 0]
+            return [1 if _flag.is_set() or (stop is not None and stop()) else 0]
 
     return _Callback()

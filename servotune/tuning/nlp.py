@@ -270,45 +270,24 @@ class Kernels:
                 ca.Function(f"{name}_hessian", [u, d, lam], [ca.densify(hessian)], opts))
 
 
-class _IterationLimit(ca.Callback):
+class _IterationLimit:
     """IPOPT's iteration callback: stops a solve after a per-solve number of iterations (so
-    one solver serves solves with different limits) or when ``inner`` (e.g. the interruption
-    flag) asks to stop."""
+    one solver serves solves with different limits), when Ctrl-C was pressed, or when
+    ``inner`` (another casadi callback) asks to stop."""
 
     def __init__(self, inner=None):
-        ca.Callback.__init__(self)
         self.inner, self.limit, self.count, self.reached = inner, None, 0, False
-        self.construct("iteration_limit", {})
+        self.callback = interrupt.casadi_iteration_callback("iteration_limit", stop=self._stop)
 
     def start(self, limit: int | None) -> None:
         self.limit, self.count, self.reached = limit, 0, False
 
-    def get_n_in(self):
-        return ca.nlpsol_n_out()
-
-    def get_n_out(self):
-        return 1
-
-    def get_name_in(self, i):
-        return ca.nlpsol_out(i)
-
-    def get_name_out(self, i):
-        return "ret"
-
-    def get_sparsity_in(self, i):
-        name = ca.nlpsol_out(i)
-        if name in ("f",):
-            return ca.Sparsity.scalar()
-        return ca.Sparsity(0, 0)
-
-    def eval(self, arg):
+    def _stop(self) -> bool:
         self.count += 1
         if self.limit is not None and self.count > self.limit:
             self.reached = True
-            return [1]
-        if self.inner is not None and float(self.inner.eval(arg)[0]) != 0:
-            return [1]
-        return [0]
+            return True
+        return self.inner is not None and float(self.inner.eval([])[0]) != 0
 
 
 @dataclass(frozen=True)
@@ -465,7 +444,7 @@ class Solver:
         options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                    "ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-8, "ipopt.max_iter": max_iter,
                    "ipopt.mu_strategy": "adaptive", "hess_lag": self.hessian,
-                   "iteration_callback": self._limit}
+                   "iteration_callback": self._limit.callback}
         if warm:
             options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                             "ipopt.warm_start_bound_push": 1e-9,
