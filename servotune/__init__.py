@@ -63,6 +63,7 @@ _LAZY = {
     "describing_function": ".friction.equivalent",
     "equivalent_damping_stiction": ".friction.equivalent",
     "stiction_describing_function": ".friction.equivalent",
+    "lugre_periodic_force": ".friction.periodic",
     "FrictionFit": ".friction.identify",
     "fit_presliding": ".friction.identify",
     "fit_steady_state": ".friction.identify",
@@ -71,6 +72,8 @@ _LAZY = {
     "UnstableLoopError": ".plant",
     "build_plant": ".plant",
     "loop_transfer": ".plant",
+    "NonlinearCompliance": ".harmonic",
+    "nonlinear_compliance": ".harmonic",
     "Requirements": ".requirements",
     "LuGreFriction": ".simulate",
     "NonlinearAxis": ".simulate",
@@ -219,6 +222,10 @@ __all__ = [
     "sinusoid",
     # friction: velocity-dependent micro-damping
     "micro_damping",
+    # harmonic balance: amplitude-dependent compliance
+    "NonlinearCompliance",
+    "lugre_periodic_force",
+    "nonlinear_compliance",
 ]
 
 
