@@ -1,8 +1,8 @@
 """Nonlinear sweep simulation: servotune's integrator against scipy's solve_ivp on the whole sweep.
 
 Task: the bundled paper axis (41 DOFs, the paper's continuous drive, four LuGre pads) under
-the paper's sine-sweep force at the work piece, 10 -> 100 Hz in 20 s, standing still, 2000 N peak to peak
-(the pads slip around the resonance): Table 3, trial 13.
+the paper's sine-sweep force at the work piece, 10 -> 100 Hz in 20 s, standing still, 2000 N
+peak to peak (the pads slip around the resonance): Table 3, trial 13.
 
 * servotune: :func:`servotune.simulate.simulate` (exponential collocation, numba), default
   settings (step 2.5e-4 s, tolerance 1e-4). Its time is the wall time of the call, set-up
