@@ -125,10 +125,10 @@ def run_job(axis_path, workers: int, simulate: bool, starts: int, plots: bool) -
     """The job of ``servotune tune AXIS --workers W --starts S [--no-simulation] [--no-plots]``
     in this process, phase by phase (see the module docstring)."""
     t_imports = time.perf_counter()
+    import casadi
     import numpy as np
     import scipy
 
-    import casadi
     import servotune
     from servotune import design, interrupt, report, verdict
     from servotune.axis import load_axis
