@@ -225,8 +225,9 @@ class Axis:
     Raises
     ------
     ValueError
-        A part of the wrong type, or a pad, motor or encoder DOF that the structure does not
-        have (built in Python; :func:`load_axis` names the file and field instead).
+        A part of the wrong type.
+    AxisFormatError
+        A pad, motor or encoder DOF that the structure does not have.
     """
 
     name: str
@@ -267,10 +268,13 @@ class Axis:
             if self.drive.feedback == "linear":
                 named += [("drive.encoder", self.drive.encoder)]
         for where, dof in named:
-            if dof not in dofs:
-                raise ValueError(f"Axis.{where} names DOF {dof!r}, which the structure does not "
-                                 "have; name a DOF of Axis.structure "
-                                 f"({sorted(d for d in dofs if not d.startswith('mode.'))})")
+            if dof not in dofs:  # an AxisFormatError: e.g. a default stator DOF not in the file
+                raise AxisFormatError(
+                    f"{self.file}: Axis.{where} names DOF {dof!r}, which the structure does not "
+                    "have; name a DOF of the structure "
+                    f"({sorted(d for d in dofs if not d.startswith('mode.'))}) in axis.toml "
+                    "([friction] pads, [drive.motor] rotor and stator, the linear encoder's "
+                    "encoder.x)")
         if not isinstance(self.tables, Mapping):
             raise ValueError(f"Axis.tables must be a mapping, got {type(self.tables).__name__}")
         object.__setattr__(self, "defaults", tuple(str(d) for d in self.defaults))

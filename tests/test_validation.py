@@ -298,3 +298,18 @@ def test_model_keeps_the_damping_ratios_it_was_given():
     matrix = ModalModel([[1.0]], [[4.0]], ["a"], damping=[[0.4]])
     assert matrix.damping_ratio is None
     assert_allclose(matrix.modal_damping_ratios(), [0.4 / (2 * 2.0)], rtol=1e-12)  # c/(2 m w)
+
+
+def test_a_loaded_axis_whose_default_stator_is_not_in_the_structure_names_the_file(tmp_path):
+    from servotune.axis import AxisFormatError, load_axis
+    from servotune.template import template_structure, template_toml
+
+    m, k, dofs = template_structure()
+    keep = [i for i, d in enumerate(dofs) if d != "motor.stator"]
+    np.savez(tmp_path / "structure.npz", mass=m[np.ix_(keep, keep)],
+             stiffness=k[np.ix_(keep, keep)], dofs=np.array([dofs[i] for i in keep]))
+    (tmp_path / "axis.toml").write_text(
+        template_toml("s").replace('stator = "motor.stator"\n', ""))  # the default stays
+    with pytest.raises(AxisFormatError, match=r"axis\.toml: Axis\.drive\.motor\.stator names DOF "
+                       r"'motor\.stator', which the structure does not have"):
+        load_axis(tmp_path)
