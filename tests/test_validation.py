@@ -97,6 +97,17 @@ def test_design_refuses_the_reported_combination():
         Design(c=-1, kv=-5, kp=0, ti=NAN)
 
 
+@given(st.tuples(*[st.floats(min_value=1e-12, max_value=1e12)] * 3),
+       st.one_of(st.floats(min_value=1e-9, max_value=1e3), st.just(INF)))
+def test_design_keeps_every_good_value_unchanged(gains, ti):
+    c, kv, kp = gains
+    d = Design(c=c, kv=kv, kp=kp, ti=ti)
+    assert (d.c, d.kv, d.kp, d.ti) == (c, kv, kp, ti)
+    assert dataclasses.replace(d, kv=2 * kv).kv == 2 * kv  # varied by replace, validated again
+    with pytest.raises(ValueError, match=r"^Design\.kv"):
+        dataclasses.replace(d, kv=-kv)
+
+
 def test_design_keeps_good_values():
     d = Design(c=3e5, kv=16, kp=30.0, ti=INF)
     assert (d.c, d.kv, d.kp, d.ti) == (3e5, 16.0, 30.0, INF)
