@@ -86,6 +86,12 @@ class ContactKind:
     needs_friction : bool
         Whether it is built from the axis' friction law.
 
+    Raises
+    ------
+    ValueError
+        A required or optional parameter that is not in :data:`CONTACT_PARAMETERS`, or
+        ``pads`` not one of ``"contact"``, ``"locked"``, ``"free"``.
+
     See Also
     --------
     register_contact_kind, contact_kind, contact_kinds
