@@ -141,34 +141,116 @@ class Contact:
 
     @classmethod
     def viscous(cls, c: float) -> Contact:
-        """Viscous damping C [N s/m] (axis total)."""
+        """Viscous damping C [N s/m] (axis total).
+
+        Parameters
+        ----------
+        c : float
+            Total viscous damping C [N s/m], finite and >= 0.
+
+        Returns
+        -------
+        Contact
+            Kind ``viscous``, ``damping = c``, no stiffness.
+        """
         return cls("viscous", damping=c, note=f"viscous C = {c:.4g} N s/m")
 
     @classmethod
     def stiction(cls, sigma0: float, sigma1: float, sigma2: float) -> Contact:
-        """LuGre presliding linearisation: spring sigma0, damper sigma1 + sigma2 (axis totals)."""
+        """LuGre presliding linearisation: spring sigma0, damper sigma1 + sigma2 (axis totals).
+
+        About v = 0 the LuGre force ``F = sigma0 z + sigma1 dz/dt + sigma2 v`` (Bianchi et al.
+        2014, Eq 3) with ``dz/dt = v`` to first order is a spring sigma0 in parallel with a
+        damper sigma1 + sigma2.
+
+        Parameters
+        ----------
+        sigma0 : float
+            Total bristle stiffness [N/m].
+        sigma1 : float
+            Total bristle damping [N s/m].
+        sigma2 : float
+            Total viscous coefficient [N s/m].
+
+        Returns
+        -------
+        Contact
+            Kind ``stiction``, ``stiffness = sigma0``, ``damping = sigma1 + sigma2``.
+        """
         return cls("stiction", stiffness=sigma0, damping=sigma1 + sigma2,
                    note=f"stiction: sigma0 = {sigma0:.3g} N/m, sigma1 + sigma2 = "
                         f"{sigma1 + sigma2:.3g} N s/m")
 
     @classmethod
     def equivalent(cls, ceq: float, keq: float = 0.0, amplitude: float | None = None) -> Contact:
-        """Describing-function contact: Ceq [N s/m] and Keq [N/m] (axis totals)."""
+        """Describing-function contact: Ceq [N s/m] and Keq [N/m] (axis totals).
+
+        Parameters
+        ----------
+        ceq : float
+            Total equivalent damping Ceq [N s/m] (Bianchi et al. 2014, Eq 8-10).
+        keq : float
+            Total equivalent stiffness Keq [N/m].
+        amplitude : float, optional
+            The vibration amplitude [m] the values belong to; only shown in ``note``.
+
+        Returns
+        -------
+        Contact
+            Kind ``equivalent``, ``stiffness = keq``, ``damping = ceq``.
+
+        See Also
+        --------
+        servotune.friction.equivalent.describing_function : Ceq and Keq of a friction law.
+        """
         at = f" at A = {amplitude:.3g} m" if amplitude is not None else ""
         return cls("equivalent", stiffness=keq, damping=ceq,
                    note=f"describing function{at}: Ceq = {ceq:.3g} N s/m, Keq = {keq:.3g} N/m")
 
     @classmethod
     def sliding(cls, system, v0: float | None = None) -> Contact:
-        """Sliding linearisation: a SISO system from pad velocity to friction force (total)."""
+        """Sliding linearisation: a SISO system from pad velocity to friction force (total).
+
+        Parameters
+        ----------
+        system : control.StateSpace or control.TransferFunction
+            Total contact, pad velocity [m/s] -> friction force [N], SISO (e.g. from
+            :meth:`servotune.friction.law.FrictionLaw.sliding_system`).
+        v0 : float, optional
+            The sliding speed [m/s] it was linearised at; only shown in ``note``.
+
+        Returns
+        -------
+        Contact
+            Kind ``sliding`` with ``system`` as a state space.
+
+        Raises
+        ------
+        ValueError
+            If ``system`` is None or not SISO.
+        """
         if system is None:
             raise ValueError("a sliding contact needs its linearised system (v -> F)")
         at = f" at v0 = {v0:.3g} m/s" if v0 is not None else ""
         return cls("sliding", system=system, note=f"sliding{at}")
 
     def pad_block(self, pad: str, n_pads: int) -> control.StateSpace:
-        """One pad's share: inputs pad displacement and velocity, output the force on the pad
-        DOF (minus the friction force)."""
+        """Return one pad's share as a python-control block.
+
+        Parameters
+        ----------
+        pad : str
+            The pad DOF (its signal names follow :func:`servotune.structure.model.signal_name`).
+        n_pads : int
+            Number of pads sharing the contact (each gets ``1/n_pads`` of it).
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs the pad displacement [m] and velocity [m/s] (only the velocity for a
+            dynamic contact, ``system``), output the force on the pad DOF [N], minus the
+            friction force: ``-(k x + c v)/n_pads`` or ``-system(v)/n_pads``.
+        """
         x, v, f = signal_name(pad), signal_name(pad, "v_"), signal_name(pad, "f_")
         name = f"contact_{signal_name(pad)}"
         if self.system is not None:
@@ -192,14 +274,15 @@ class GuideWayFriction:
     pads : tuple of str
         Relative-X DOFs of the pads; the friction is shared equally among them.
     lugre : LuGreParameters, optional
-        Axis-total LuGre parameters: the law is then :class:`~servotune.friction.laws.lugre.
-        LuGreFriction`. Filled in from ``law`` when that is LuGre, else None.
+        Axis-total LuGre parameters: the law is then
+        :class:`~servotune.friction.laws.lugre.LuGreFriction`. Filled in from ``law`` when
+        that is LuGre, else None.
     viscous : float, optional
         Axis-total damping of the viscous-only model [N s/m] (default: the law's viscous part,
         :attr:`~servotune.friction.law.FrictionLaw.viscous_part`).
     law : FrictionLaw, optional
-        The friction law (axis totals), any registered one (:func:`servotune.friction.law.
-        friction_law`); give it or ``lugre``.
+        The friction law (axis totals), any registered one
+        (:func:`servotune.friction.law.friction_law`); give it or ``lugre``.
 
     Raises
     ------
@@ -338,12 +421,16 @@ def build_plant(structure: ModalModel, drive: Drive | None = None, contact: Cont
     contact : Contact, optional
         Guide-way model (default: free).
     pads : sequence of str
-        The pad DOFs (relative X at the guide-way pads) where the contact acts.
+        The pad DOFs (relative X at the guide-way pads) where the contact acts; a ``locked``
+        contact removes them from the structure, a ``free`` one ignores them.
+    name : str
+        Name of the interconnected system.
 
     Returns
     -------
     control.StateSpace
-        With the named inputs and outputs of the module docstring.
+        With the named inputs and outputs of the module docstring (without a drive only the
+        work-piece forces ``f_wp_*`` and displacements ``wp_*``).
 
     Raises
     ------
@@ -392,10 +479,36 @@ def loop_transfer(structure: ModalModel, drive: Drive, contact: Contact | None =
     opened with the position loop open too (as a drive commissioning tool measures it); the
     position loop is opened with the velocity loop closed.
 
+    Parameters
+    ----------
+    structure : ModalModel
+        The reduced structure.
+    drive : Drive
+        The cascade whose loop is opened.
+    contact : Contact, optional
+        Guide-way model (default: free).
+    pads : sequence of str
+        The pad DOFs where the contact acts.
+    loop : {"velocity", "position"}
+        The loop to open: at ``omega_fb`` [rad/s] or at ``x_fb`` [m].
+
     Returns
     -------
     control.StateSpace
         SISO, input ``u`` (injected feedback), output ``y`` (minus the measured signal).
+
+    Raises
+    ------
+    ValueError
+        ``loop`` not ``"velocity"`` or ``"position"``, or a contact other than ``free``
+        with no pads.
+    UnknownDofError
+        A pad, motor or encoder DOF the structure does not have.
+
+    See Also
+    --------
+    servotune.frequency.analyse_loop : Margins and sensitivity peak of L.
+    servotune.analysis.loop_report : Both loops of an axis analysed.
     """
     if loop not in ("velocity", "position"):
         raise ValueError(f"loop must be 'velocity' or 'position', got {loop!r}")
