@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from ..drive import Drive
@@ -74,7 +75,20 @@ class PadReceptance:
 
     def __post_init__(self) -> None:
         shapes = self._left[:, None, :] * self._right[None, :, :]
-        object.__setattr__(self, "_shapes", shapes.reshape(-1, self._left.shape[1]))
+        object.__setattr__(self, "_shapes",
+                           np.ascontiguousarray(shapes.reshape(-1, self._left.shape[1])))
+        empty = np.zeros(1)
+        if self.drive is None:
+            drive = (False, empty, empty, empty, empty, empty, empty, np.zeros(5), np.zeros(4))
+        else:
+            (ci_n, ci_d), (f_n, f_d), (cv_n, cv_d), delays = self._cascade
+            m = self.drive.motor
+            motor = np.array([m.inductance, m.resistance,
+                              m.torque_constant * m.back_emf_constant,
+                              self.drive.kv / self.drive.ratio])
+            drive = (True, ci_n, ci_d, f_n, f_d, cv_n, cv_d, np.array(delays, dtype=float),
+                     motor)
+        object.__setattr__(self, "_kernel_drive", drive)
 
     @property
     def n_pads(self) -> int:
@@ -101,19 +115,56 @@ class PadReceptance:
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
         if not np.all(np.isfinite(omega) & (omega > 0.0)):
             raise ValueError("the receptance is asked at finite frequencies > 0 rad/s")
-        denom = self._omega2[:, None] - omega[None, :] ** 2 + 1j * omega[None, :] * \
-            self._damping[:, None]
-        pl, pr = self._left.shape[0], self._right.shape[0]
-        h = (self._shapes @ (1.0 / denom)).reshape(pl, pr, omega.size)
         n = self.n_pads + 1
-        if self.drive is None:
-            return h[:n, :n]
-        g_fb, g_rel = _cascade_gains(self.drive, self._cascade, 1j * omega)
-        # rows: outputs (n), rel (n), fb (n + 1); columns: inputs (n), rel torque (n)
-        loop_u = g_fb * h[n + 1, :n] + g_rel * h[n, :n]            # (n, K)
-        loop_t = g_fb * h[n + 1, n] + g_rel * h[n, n]              # (K,)
-        torque = loop_u / (1.0 - loop_t)                            # T per input
-        return h[:n, :n] + h[:n, n][:, None, :] * torque[None, :, :]
+        out = np.empty((n, n, omega.size), dtype=complex)
+        _receptance_kernel(omega, self._omega2, self._damping, self._shapes,
+                           self._right.shape[0], n, *self._kernel_drive, out)
+        return out
+
+
+@numba.njit(cache=True)
+def _polynomial(c, s):
+    out = c[0] + 0j
+    for i in range(1, c.size):
+        out = out * s + c[i]
+    return out
+
+
+@numba.njit(cache=True)
+def _receptance_kernel(omega, omega2, damping, shapes, n_right, n, has_drive, ci_n, ci_d,
+                       f_n, f_d, cv_n, cv_d, delays, motor, out):
+    """Modal sum between the ports, then the torque closed through the motor port (rows:
+    outputs 0..n-1, rel n, feedback n+1; columns: inputs 0..n-1, rel torque n)."""
+    rows = shapes.shape[0] // n_right
+    h = np.empty((rows, n_right), dtype=np.complex128)
+    for k in range(omega.size):
+        w = omega[k]
+        h[:, :] = 0.0
+        for m in range(omega2.size):
+            term = 1.0 / (omega2[m] - w * w + 1j * w * damping[m])
+            for o in range(rows):
+                for i in range(n_right):
+                    h[o, i] += shapes[o * n_right + i, m] * term
+        if not has_drive:
+            for o in range(n):
+                for i in range(n):
+                    out[o, i, k] = h[o, i]
+            continue
+        s = 1j * w
+        t_i, t_v, t_m, t_p, t_f = delays[0], delays[1], delays[2], delays[3], delays[4]
+        inductance, resistance, ktke, kv_per_ratio = motor[0], motor[1], motor[2], motor[3]
+        ci = _polynomial(ci_n, s) / _polynomial(ci_d, s) * np.exp(-s * t_i)
+        winding = s * inductance + resistance + ci
+        a = ci * _polynomial(f_n, s) / _polynomial(f_d, s) * np.exp(-s * t_v) * \
+            _polynomial(cv_n, s) / _polynomial(cv_d, s)
+        measurement = np.exp(-s * t_m) / (1.0 + s * t_f)
+        g_fb = -(a * np.exp(-s * t_p) * kv_per_ratio) / winding
+        g_rel = -(a * measurement + ktke) * s / winding
+        loop_t = g_fb * h[n + 1, n] + g_rel * h[n, n]
+        for i in range(n):
+            torque = (g_fb * h[n + 1, i] + g_rel * h[n, i]) / (1.0 - loop_t)
+            for o in range(n):
+                out[o, i, k] = h[o, i] + h[o, n] * torque
 
 
 def _cascade_polynomials(drive: Drive) -> tuple:
@@ -126,31 +177,6 @@ def _cascade_polynomials(drive: Drive) -> tuple:
             poly(drive.velocity_loop.transfer_function()),
             (sampling.current_delay, sampling.velocity_delay,
              sampling.speed_measurement_delay, sampling.position_delay, sampling.speed_filter))
-
-
-def _horner(coefficients, s):
-    """A polynomial (highest power first) at s."""
-    out = np.full(s.shape, coefficients[0], dtype=complex)
-    for c in coefficients[1:]:
-        out = out * s + c
-    return out
-
-
-def _cascade_gains(drive: Drive, cascade: tuple, s: np.ndarray):
-    """Motor torque per feedback position and per rotor angle, ``T = g_fb x_fb + g_rel phi``
-    (no reference): the cascade of :func:`servotune.drive.cascade_response` with exact delays,
-    ``T = -(a D_p Kv/r x_fb + (a M_v + kt ke) s phi) / (s L + R + C_i D_i)``,
-    ``a = C_i D_i F D_v C_v``."""
-    (ci_n, ci_d), (f_n, f_d), (cv_n, cv_d), (t_i, t_v, t_m, t_p, t_f) = cascade
-    m = drive.motor
-    ci = _horner(ci_n, s) / _horner(ci_d, s) * np.exp(-s * t_i)
-    winding = s * m.inductance + m.resistance + ci
-    a = ci * _horner(f_n, s) / _horner(f_d, s) * np.exp(-s * t_v) * \
-        _horner(cv_n, s) / _horner(cv_d, s)
-    measurement = np.exp(-s * t_m) / (1.0 + s * t_f)
-    g_fb = -(a * np.exp(-s * t_p) * drive.kv / drive.ratio) / winding
-    g_rel = -(a * measurement + m.torque_constant * m.back_emf_constant) * s / winding
-    return g_fb, g_rel
 
 
 def pad_receptance(structure: ModalModel, drive: Drive | None, pads, force_dof: str = "wp.x",
