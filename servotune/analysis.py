@@ -44,14 +44,27 @@ __all__ = [
 
 
 def default_omega(f_min_hz: float = 1.0, f_max_hz: float = 1000.0, n: int = 3000) -> np.ndarray:
-    """A log-spaced grid [rad/s]."""
+    """Return a log-spaced grid of angular frequencies [rad/s].
+
+    Parameters
+    ----------
+    f_min_hz, f_max_hz : float
+        First and last frequency [Hz], > 0.
+    n : int
+        Number of points.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``2 pi geomspace(f_min_hz, f_max_hz, n)`` [rad/s], shape (n,).
+    """
     return 2 * math.pi * np.geomspace(f_min_hz, f_max_hz, n)
 
 
 def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
                  frequency_hz: float | None = None, speed: float | None = None,
                  c: float | None = None) -> Contact:
-    """The axis' guide-way contact model of a kind (:func:`servotune.plant.contact_kinds`).
+    """Return the axis' guide-way contact model of a kind (:func:`servotune.plant.contact_kinds`).
 
     Parameters
     ----------
@@ -96,8 +109,32 @@ def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
 
 def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,
                controlled: bool = True) -> control.StateSpace:
-    """The linearised axis (see :func:`servotune.plant.build_plant`) with the axis' drive (or
-    ``drive``), or without control when ``controlled`` is False."""
+    """Return the linearised axis with the axis' drive (or ``drive``), or without control.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis: its structure and, when it has ``[friction]``, its pads.
+    contact : Contact
+        The guide-way contact model (a ``free`` contact gets no pads).
+    drive : Drive, optional
+        The drive (default: the axis' own); ignored when ``controlled`` is False.
+    controlled : bool
+        With the drive's cascade (True) or without motion control (False: the structure and
+        its contacts only, the paper's Fig 9 set-up).
+
+    Returns
+    -------
+    control.StateSpace
+        The plant of :func:`servotune.plant.build_plant`, with its named signals.
+
+    Raises
+    ------
+    AxisFormatError
+        Controlled, with no ``drive`` given and no ``[drive]`` in the axis.
+    ValueError
+        A contact acting at the pads on an axis without ``[friction]`` (no pads).
+    """
     drive = (drive or axis.require_drive()) if controlled else None
     pads = axis.pads if axis.friction is not None else ()
     return build_plant(axis.structure, drive, contact, pads if contact.pads != "free" else ())
@@ -105,7 +142,20 @@ def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,
 
 @dataclass(frozen=True)
 class LoopReport:
-    """The velocity and position loops of an axis: analyses and their frequency responses."""
+    """The velocity and position loops of an axis: analyses and their frequency responses.
+
+    Attributes
+    ----------
+    contact : Contact
+        The guide-way contact model the loops were computed with.
+    omega : numpy.ndarray
+        Angular frequencies [rad/s], shape (K,).
+    velocity, position : LoopAnalysis
+        Margins, Ms and bandwidth of the velocity loop (position loop open) and of the position
+        loop (velocity loop closed).
+    l_velocity, l_position : numpy.ndarray
+        The loop transfer functions L(j omega) [-] at ``omega``, complex, shape (K,).
+    """
 
     contact: Contact
     omega: np.ndarray
@@ -115,11 +165,32 @@ class LoopReport:
     l_position: np.ndarray
 
     def to_dict(self) -> dict:
+        """Return the report JSON-ready.
+
+        Returns
+        -------
+        dict
+            ``contact`` (the kind), ``contact_note``, and ``velocity_loop``,
+            ``position_loop`` as :meth:`LoopAnalysis.to_dict
+            <servotune.frequency.LoopAnalysis.to_dict>` gives them (no frequency responses).
+        """
         return {"contact": self.contact.kind, "contact_note": self.contact.note,
                 "velocity_loop": self.velocity.to_dict(),
                 "position_loop": self.position.to_dict()}
 
     def plot(self, title: str = "Loop transfer functions"):
+        """Return the Bode diagram of both loops with their margins marked.
+
+        Parameters
+        ----------
+        title : str
+            The figure's title.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure of :func:`servotune.plots.plot_bode`.
+        """
         from .plots import plot_bode
 
         return plot_bode({"velocity": (self.omega, self.l_velocity),
@@ -129,13 +200,44 @@ class LoopReport:
 
 def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
                 omega=None) -> LoopReport:
-    """Margins, Ms and bandwidth of both loops (velocity with the position loop open,
-    position with the velocity loop closed).
+    """Return the margins, Ms and bandwidth of both loops of an axis.
+
+    The velocity loop is opened at its feedback with the position loop open, the position
+    loop with the velocity loop closed (:func:`servotune.plant.loop_transfer`), and each is
+    analysed by :func:`servotune.frequency.analyse_loop`.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis: its structure and, when it has ``[friction]``, its pads.
+    contact : Contact
+        The guide-way contact model.
+    drive : Drive, optional
+        The drive (default: the axis' own).
+    omega : array_like, optional
+        Angular frequencies [rad/s], 1-D, increasing (default 0.1 Hz to 3 kHz, 8001 points,
+        log-spaced).
+
+    Returns
+    -------
+    LoopReport
+        The analyses and L(j omega) of both loops.
 
     Raises
     ------
     UnstableLoopError
-        If a closed loop is unstable.
+        If a closed loop is unstable (for a sampled drive the message says that its delays
+        cost phase).
+    AxisFormatError
+        With no ``drive`` given and no ``[drive]`` in the axis.
+    ValueError
+        A contact acting at the pads on an axis without ``[friction]``, or a bad ``omega``.
+
+    See Also
+    --------
+    compliance_curve : The work-piece compliance with the same contact.
+    servotune.frequency.compliance : The compliance of a plant.
+    servotune.simulate.simulator.simulate : The nonlinear time response of the axis.
     """
     drive = drive or axis.require_drive()
     omega = default_omega(0.1, 3000.0, 8001) if omega is None else np.asarray(omega, float)
@@ -160,7 +262,24 @@ def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
 
 @dataclass(frozen=True)
 class ComplianceCurve:
-    """A work-piece compliance curve and its peak (SI)."""
+    """A work-piece compliance curve and its peak (SI).
+
+    Attributes
+    ----------
+    label : str
+        Name of the curve (legend).
+    omega : numpy.ndarray
+        Angular frequencies [rad/s], shape (K,).
+    values : numpy.ndarray
+        Complex compliance [m/N], shape (K,).
+    peak_compliance : float
+        Largest |compliance| within ``band`` [m/N], refined between grid points
+        (:func:`servotune.frequency.peak`).
+    peak_frequency : float
+        Where it occurs [rad/s].
+    band : tuple of float, optional
+        The band the peak was sought in [rad/s].
+    """
 
     label: str
     omega: np.ndarray
@@ -179,6 +298,14 @@ class ComplianceCurve:
         return bool(self.peak_frequency <= lo * 1.03 or self.peak_frequency >= hi / 1.03)
 
     def to_dict(self) -> dict:
+        """Return the peak JSON-ready.
+
+        Returns
+        -------
+        dict
+            ``label``, ``peak_compliance`` [m/N], ``peak_frequency_hz`` [Hz] and
+            ``peak_at_edge`` (:attr:`at_edge`); the curve itself is left out.
+        """
         return {"label": self.label, "peak_compliance": self.peak_compliance,
                 "peak_frequency_hz": self.peak_frequency * HZ_PER_RAD_S,
                 "peak_at_edge": self.at_edge}
@@ -194,8 +321,50 @@ def _curve(label, plant, omega, band) -> ComplianceCurve:
 def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,
                      label: str | None = None, controlled: bool | None = None
                      ) -> ComplianceCurve:
-    """Work-piece X compliance with a contact model, closed loop when the axis has a drive
-    (or ``controlled`` says so); the peak is taken over the axis' requirement band."""
+    """Return the work-piece X compliance of an axis with a contact model, and its peak.
+
+    Closed loop when the axis has a drive (or ``drive`` is given, or ``controlled`` says so);
+    the peak is taken over the axis' requirement band (``[requirements] band_hz``, default
+    5 to 300 Hz).
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis: its structure, pads, drive and requirement band.
+    contact : Contact
+        The guide-way contact model.
+    drive : Drive, optional
+        The drive (default: the axis' own).
+    omega : array_like, optional
+        Angular frequencies [rad/s], 1-D, increasing (default 1 Hz to 1 kHz, 3000 points,
+        log-spaced); it should cover the band.
+    label : str, optional
+        Name of the curve (default: the contact's note, else its kind).
+    controlled : bool, optional
+        With or without motion control (default: with, when there is a drive).
+
+    Returns
+    -------
+    ComplianceCurve
+        x/F at ``wp.x`` [m/N] and its peak in the band.
+
+    Raises
+    ------
+    UnstableLoopError
+        If the closed loop is unstable (a compliance of an unstable loop means nothing).
+    AxisFormatError
+        Controlled, with no ``drive`` given and no ``[drive]`` in the axis.
+    ValueError
+        A contact acting at the pads on an axis without ``[friction]``, a bad ``omega``, or
+        no point of ``omega`` in the band.
+
+    See Also
+    --------
+    loop_report : The margins of the loops with the same contact.
+    servotune.frequency.compliance : The compliance of a plant.
+    servotune.friction.equivalent.describing_function : Ceq and Keq of an ``equivalent``
+        contact.
+    """
     omega = default_omega() if omega is None else np.asarray(omega, float)
     if controlled is None:
         controlled = drive is not None or axis.drive is not None
@@ -204,8 +373,30 @@ def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, o
 
 
 def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[ComplianceCurve]:
-    """The paper's Fig 9: work-piece compliance with viscous guide-way damping C and no
-    motion control (the axis free to move), for each C [N s/m]."""
+    """Return the paper's Fig 9: the work-piece compliance with viscous damping C, no control.
+
+    Without motion control the axis is free to move (a rigid-body pole at the origin, which
+    the stability check accepts); the guide-way pads carry a viscous contact C.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis, with ``[friction]`` (its pads).
+    c_values : iterable of float
+        Total viscous damping values C [N s/m], finite and >= 0.
+    omega : array_like, optional
+        Angular frequencies [rad/s] (default 1 Hz to 1 kHz, 3000 points, log-spaced).
+
+    Returns
+    -------
+    list of ComplianceCurve
+        One per C, labelled ``"C = 5e+05 N s/m"``, peak in the requirement band.
+
+    Raises
+    ------
+    ValueError
+        A negative C, an axis without ``[friction]``, or no point of ``omega`` in the band.
+    """
     omega = default_omega() if omega is None else np.asarray(omega, float)
     curves = []
     for c in c_values:

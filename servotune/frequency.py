@@ -598,9 +598,9 @@ def compliance(plant: control.StateSpace, omega, force: str = "f_wp_x",
     """Return the work-piece compliance [m/N] of a plant from :func:`~servotune.plant.build_plant`.
 
     The frequency response x/F from a force input to a displacement output of the linearised
-    axis (Bianchi et al. 2014, sec 4.2), evaluated by :func:`fast_frequency_response`, once the
-    plant is checked stable (:func:`require_stable`; a rigid-body pole at the origin of an
-    uncontrolled axis is accepted).
+    axis (the quantity of Bianchi et al. 2014, Fig 9), evaluated by
+    :func:`fast_frequency_response` once the plant is checked stable (:func:`require_stable`;
+    a rigid-body pole at the origin of an uncontrolled axis is accepted).
 
     Parameters
     ----------
@@ -631,11 +631,6 @@ def compliance(plant: control.StateSpace, omega, force: str = "f_wp_x",
     servotune.analysis.compliance_curve : The compliance of an axis description, with its peak.
     servotune.analysis.loop_report : Margins of the loops of the same axis.
     servotune.simulate.simulator.simulate : The nonlinear time response.
-
-    References
-    ----------
-    G. Bianchi et al., "Analysis of vibration damping in machine tools", Procedia CIRP 21
-    (2014), sec 4.2.
 
     Examples
     --------
