@@ -143,6 +143,20 @@ def test_value_types_refuse_bad_values_by_name(build, message):
         build()
 
 
+def test_drive_parts_keep_good_values_as_floats():
+    motor = Motor(1, 1.2, 0.4, 3e-3)
+    assert (motor.torque_constant, motor.resistance) == (1.0, 0.4)
+    assert isinstance(motor.torque_constant, float)
+    assert PIController(kp=30, ti=INF).ti == INF
+    notch = NotchFilter(410, width=0.5, depth=0)
+    assert (notch.f_hz, notch.width, notch.depth) == (410.0, 0.5, 0.0)
+    s = Sampling(current_period=0, velocity_period=62.5e-6, speed_filter=0)
+    assert (s.current_period, s.velocity_period, s.speed_filter) == (0.0, 62.5e-6, 0.0)
+    drive = small_drive(kv=np.float64(25.5), velocity_feedforward=1)
+    assert (drive.kv, drive.velocity_feedforward) == (25.5, 1.0)
+    assert type(drive.kv) is float
+
+
 def test_builder_refuses_bad_elements_by_name():
     b = StructureBuilder()
     b.add_node("a", (0.0, 0.0, 0.0))
