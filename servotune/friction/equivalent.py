@@ -164,7 +164,30 @@ def stiction_describing_function(fs, sigma0, amplitude, omega):
 
 
 def stiction_peak_damping(fs, sigma0, omega) -> tuple[np.ndarray, np.ndarray]:
-    """Where the stiction cycle damps most: ``(A = 2 Fs/sigma0, Ceq_max = sigma0/(pi w))``.
+    """Return where the stiction cycle damps most: ``A = 2 Fs/sigma0``, ``Ceq = sigma0/(pi w)``.
+
+    The maximum over A of :func:`equivalent_damping_stiction` (see its Notes).
+
+    Parameters
+    ----------
+    fs : array_like
+        Static friction force Fs [N], > 0.
+    sigma0 : array_like
+        Presliding (bristle) stiffness [N/m], > 0.
+    omega : array_like
+        Angular frequency w [rad/s], > 0. All three broadcast.
+
+    Returns
+    -------
+    amplitude : numpy.ndarray
+        The amplitude of the maximum, 2 Fs/sigma0 [m].
+    ceq_max : numpy.ndarray
+        The maximum equivalent damping, sigma0/(pi w) [N s/m].
+
+    Raises
+    ------
+    ValueError
+        If a value is not positive and finite.
 
     Examples
     --------
@@ -185,6 +208,8 @@ def describing_function(params: LuGreParameters, amplitude, omega,
     Parameters
     ----------
     params : LuGreParameters
+        The LuGre element (sigma0 [N/m], sigma1, sigma2 [N s/m], Fc, Fs [N], vs [m/s] and the
+        optional micro-damping decay speed); axis totals give axis-total Ceq and Keq.
     amplitude : array_like
         Displacement amplitudes A [m], > 0.
     omega : array_like
@@ -199,6 +224,20 @@ def describing_function(params: LuGreParameters, amplitude, omega,
     (ceq, keq) : tuple of numpy.ndarray
         ``Ceq = E / (pi w A^2)`` [N s/m] with E the energy dissipated per cycle, and the
         first-harmonic stiffness Keq [N/m], of the broadcast shape.
+
+    Raises
+    ------
+    ValueError
+        If an amplitude or frequency is not positive and finite, or ``n_steps`` is not a
+        multiple of 4 >= 8.
+
+    See Also
+    --------
+    servotune.analysis.compliance_curve : The compliance with an ``equivalent`` contact, whose
+        Ceq and Keq this gives (:meth:`servotune.plant.GuideWayFriction.contact`).
+    servotune.simulate.simulator.simulate : The time response with the full LuGre law, the
+        check of the linear equivalent.
+    stiction_describing_function : The closed form of the paper's idealised cycle.
 
     Notes
     -----

@@ -96,14 +96,41 @@ class FrictionFit:
     kind: str
 
     def estimate(self, name: str) -> tuple[float, float]:
-        """``(value, standard error)`` of one estimated parameter."""
+        """Return the estimate of one parameter and its standard error.
+
+        Parameters
+        ----------
+        name : str
+            An estimated parameter (one of :attr:`names`), e.g. ``"fs"``.
+
+        Returns
+        -------
+        value : float
+            The estimate, in the parameter's SI unit.
+        standard_error : float
+            Its standard error, same unit.
+
+        Raises
+        ------
+        ValueError
+            If ``name`` was not estimated.
+        """
         if name not in self.names:
             raise ValueError(f"{name!r} was not estimated; estimated: {self.names}")
         i = self.names.index(name)
         return float(self.values[i]), float(self.standard_errors[i])
 
     def to_dict(self) -> dict:
-        """JSON-ready: estimates, standard errors, fixed values, residual statistics."""
+        """Return the fit JSON-ready: estimates, standard errors, fixed values, residuals.
+
+        Returns
+        -------
+        dict
+            ``kind``, ``estimates`` and ``standard_errors`` (name -> SI value), ``fixed``,
+            ``parameters`` (:meth:`LuGreParameters.to_dict
+            <servotune.friction.lugre.LuGreParameters.to_dict>`), ``rms_residual`` [N] and
+            ``n_points``.
+        """
         return {
             "kind": self.kind,
             "estimates": {n: float(v) for n, v in zip(self.names, self.values, strict=True)},

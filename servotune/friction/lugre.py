@@ -193,7 +193,24 @@ class LuGreParameters:
 
     @classmethod
     def named(cls, name: str) -> LuGreParameters:
-        """A published parameter set: ``"bianchi2014"`` or ``"canudas1995"``."""
+        """Return a published parameter set: ``"bianchi2014"`` or ``"canudas1995"``.
+
+        Parameters
+        ----------
+        name : str
+            The set's name, case-insensitive (:meth:`names`).
+
+        Returns
+        -------
+        LuGreParameters
+            :data:`BIANCHI2014` (axis totals, Bianchi et al. 2014, table after Fig 8) or
+            :data:`CANUDAS1995` (Canudas de Wit et al. 1995, sec IV, unit mass).
+
+        Raises
+        ------
+        ValueError
+            For an unknown name.
+        """
         key = str(name).lower()
         if key not in _NAMED:
             raise ValueError(f"unknown parameter set {name!r}; choose one of {sorted(_NAMED)}")
@@ -201,17 +218,37 @@ class LuGreParameters:
 
     @staticmethod
     def names() -> tuple[str, ...]:
-        """The names accepted by :meth:`named`."""
+        """Return the names accepted by :meth:`named`.
+
+        Returns
+        -------
+        tuple of str
+            The names, sorted.
+        """
         return tuple(sorted(_NAMED))
 
     def scaled(self, factor: float) -> LuGreParameters:
-        """The same contact with every force and coefficient multiplied by ``factor``.
+        """Return the same contact with every force and coefficient multiplied by ``factor``.
 
         Fc, Fs, sigma0, sigma1 and sigma2 scale; vs, delta and sigma1_decay_speed do not. Use it
-        to share an
-        axis-total friction (as identified in the paper, where all friction is lumped at the
-        guide-way pads) among n pads with ``factor = 1/n``: n scaled elements in parallel moving
-        together give back the total force for every motion.
+        to share an axis-total friction (as identified in the paper, where all friction is
+        lumped at the guide-way pads) among n pads with ``factor = 1/n``: n scaled elements in
+        parallel moving together give back the total force for every motion.
+
+        Parameters
+        ----------
+        factor : float
+            The scale [-], finite and > 0.
+
+        Returns
+        -------
+        LuGreParameters
+            The scaled parameters.
+
+        Raises
+        ------
+        ValueError
+            If ``factor`` is not finite and > 0.
         """
         factor = _finite("factor", factor)
         if factor <= 0.0:
@@ -226,8 +263,13 @@ class LuGreParameters:
         return self.fs / self.sigma0
 
     def to_dict(self) -> dict:
-        """The parameters as a plain dictionary (SI; ``sigma1_decay_speed`` None when sigma1 is
-        constant)."""
+        """Return the parameters as a plain dictionary.
+
+        Returns
+        -------
+        dict
+            Field name -> value (SI; ``sigma1_decay_speed`` None when sigma1 is constant).
+        """
         return dataclasses.asdict(self)
 
 
@@ -258,7 +300,27 @@ def _stribeck_exp(params: LuGreParameters, v: np.ndarray) -> np.ndarray:
 
 
 def stribeck_curve(params: LuGreParameters, v) -> np.ndarray:
-    """g(v) = Fc + (Fs - Fc) exp(-|v/vs|^delta) [N], the magnitude of sliding friction.
+    """Return the Stribeck curve g(v) = Fc + (Fs - Fc) exp(-|v/vs|^delta) [N].
+
+    g is the magnitude of the steady sliding friction without its viscous part (Bianchi et al.
+    2014, Eq 3).
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    v : array_like
+        Sliding velocity [m/s], finite.
+
+    Returns
+    -------
+    numpy.ndarray
+        g(v) [N], of the shape of ``v``.
+
+    Raises
+    ------
+    ValueError
+        If ``v`` is not finite.
 
     Examples
     --------
@@ -280,7 +342,24 @@ def _stribeck_derivative(params: LuGreParameters, v: np.ndarray) -> np.ndarray:
 
 
 def steady_state_friction(params: LuGreParameters, v) -> np.ndarray:
-    """Sliding friction at constant velocity, F_ss(v) = g(v) sgn(v) + sigma2 v [N].
+    """Return the sliding friction at constant velocity, F_ss(v) = g(v) sgn(v) + sigma2 v [N].
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    v : array_like
+        Sliding velocity [m/s], finite.
+
+    Returns
+    -------
+    numpy.ndarray
+        F_ss(v) [N], of the shape of ``v`` (0 at v = 0).
+
+    Raises
+    ------
+    ValueError
+        If ``v`` is not finite.
 
     Examples
     --------
@@ -295,16 +374,53 @@ def steady_state_friction(params: LuGreParameters, v) -> np.ndarray:
 
 
 def steady_state_slope(params: LuGreParameters, v) -> np.ndarray:
-    """dF_ss/dv = g'(v) sgn(v) + sigma2 [N s/m]; negative in the Stribeck region.
+    """Return the slope of the steady-state friction, dF_ss/dv = g'(v) sgn(v) + sigma2 [N s/m].
 
-    At v = 0 the slope of g is taken as 0 (its one-sided values differ in sign there).
+    It is negative in the Stribeck region. At v = 0 the slope of g is taken as 0 (its
+    one-sided values differ in sign there), so the slope there is sigma2.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    v : array_like
+        Sliding velocity [m/s], finite.
+
+    Returns
+    -------
+    numpy.ndarray
+        dF_ss/dv [N s/m], of the shape of ``v``.
+
+    Raises
+    ------
+    ValueError
+        If ``v`` is not finite.
     """
     v = _array("v", v)
     return _stribeck_derivative(params, v) * np.sign(v) + params.sigma2
 
 
 def lugre_derivative(params: LuGreParameters, z, v) -> np.ndarray:
-    """dz/dt = v - sigma0 |v| z / g(v) [m/s] (bristle equation; Bianchi et al. 2014, Eq 3).
+    """Return the bristle rate dz/dt = v - sigma0 |v| z / g(v) [m/s] (Bianchi et al. 2014, Eq 3).
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    z : array_like
+        Bristle deflection [m], finite.
+    v : array_like
+        Sliding velocity [m/s], finite; broadcast against ``z``.
+
+    Returns
+    -------
+    numpy.ndarray
+        dz/dt [m/s], of the broadcast shape.
+
+    Raises
+    ------
+    ValueError
+        If ``z`` or ``v`` is not finite.
 
     Examples
     --------
@@ -321,8 +437,27 @@ def lugre_derivative(params: LuGreParameters, z, v) -> np.ndarray:
 
 
 def micro_damping(params: LuGreParameters, v) -> np.ndarray:
-    """The bristle damping sigma1(v) [N s/m]: sigma1, or ``sigma1 exp(-(v/v_d)^2)`` with
-    ``v_d = params.sigma1_decay_speed``.
+    """Return the bristle damping sigma1(v) [N s/m].
+
+    sigma1, or ``sigma1 exp(-(v/v_d)^2)`` with ``v_d = params.sigma1_decay_speed`` (Olsson et
+    al. 1998; see the module docstring).
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    v : array_like
+        Sliding velocity [m/s], finite.
+
+    Returns
+    -------
+    numpy.ndarray
+        sigma1(v) [N s/m], of the shape of ``v``.
+
+    Raises
+    ------
+    ValueError
+        If ``v`` is not finite.
 
     Examples
     --------
@@ -346,10 +481,29 @@ def _micro_damping_slope(params: LuGreParameters, v: np.ndarray) -> np.ndarray:
 
 
 def lugre_force(params: LuGreParameters, z, v) -> np.ndarray:
-    """F = sigma0 z + sigma1(v) dz/dt + sigma2 v [N], the friction force on the contact.
+    """Return the friction force F = sigma0 z + sigma1(v) dz/dt + sigma2 v [N] (Eq 3).
 
     sigma1(v) is :func:`micro_damping` (the constant sigma1 unless ``sigma1_decay_speed`` is
-    set).
+    set), dz/dt is :func:`lugre_derivative` (Bianchi et al. 2014, Eq 3).
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    z : array_like
+        Bristle deflection [m], finite.
+    v : array_like
+        Sliding velocity [m/s], finite; broadcast against ``z``.
+
+    Returns
+    -------
+    numpy.ndarray
+        F [N], of the broadcast shape.
+
+    Raises
+    ------
+    ValueError
+        If ``z`` or ``v`` is not finite.
     """
     z = _array("z", z)
     v = _array("v", v)
@@ -371,7 +525,16 @@ class LuGreJacobian(NamedTuple):
 
 
 def lugre_jacobian(params: LuGreParameters, z, v) -> LuGreJacobian:
-    """Partial derivatives of dz/dt and F with respect to z and v.
+    """Return the partial derivatives of dz/dt and F with respect to z and v.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    z : array_like
+        Bristle deflection [m], finite.
+    v : array_like
+        Sliding velocity [m/s], finite; broadcast against ``z``.
 
     Returns
     -------
@@ -420,7 +583,12 @@ def lugre_jacobian(params: LuGreParameters, z, v) -> LuGreJacobian:
 
 
 def presliding_linearisation(params: LuGreParameters) -> control.StateSpace:
-    """The LuGre contact linearised at rest: a spring sigma0 with a damper sigma1 + sigma2.
+    """Return the LuGre contact linearised at rest: a spring sigma0 with a damper sigma1 + sigma2.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
 
     Returns
     -------
@@ -453,7 +621,14 @@ def presliding_linearisation(params: LuGreParameters) -> control.StateSpace:
 
 
 def sliding_linearisation(params: LuGreParameters, v0: float) -> control.StateSpace:
-    """The LuGre contact linearised while sliding at constant velocity v0 != 0.
+    """Return the LuGre contact linearised while sliding at constant velocity v0 != 0.
+
+    Parameters
+    ----------
+    params : LuGreParameters
+        The LuGre element.
+    v0 : float
+        Sliding velocity [m/s], finite and non-zero.
 
     Returns
     -------
@@ -523,7 +698,13 @@ class LuGreResponse:
         return float(np.trapezoid(self.force * self.velocity, self.t))
 
     def plot(self):
-        """Force against displacement (a hysteresis plot)."""
+        """Return the plot of force against displacement (a hysteresis plot).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure of :func:`servotune.plots.plot_response_hysteresis`.
+        """
         from .. import plots
 
         return plots.plot_response_hysteresis(self)
@@ -569,6 +750,7 @@ def simulate_lugre(params: LuGreParameters, t, *, displacement=None, velocity=No
     Parameters
     ----------
     params : LuGreParameters
+        The LuGre element.
     t : array_like
         Strictly increasing sample times [s].
     displacement : array_like, optional
@@ -584,6 +766,13 @@ def simulate_lugre(params: LuGreParameters, t, *, displacement=None, velocity=No
     -------
     LuGreResponse
         Displacement (from 0 at t[0] when a velocity is given), velocity, z, dz/dt and F on t.
+
+    Raises
+    ------
+    ValueError
+        If ``t`` is not 1-D, strictly increasing with at least 2 times, a value is not finite,
+        not exactly one of ``displacement`` and ``velocity`` is given, ``displacement`` is a
+        callable, or samples do not have the shape of ``t``.
 
     Notes
     -----
@@ -673,7 +862,13 @@ class HysteresisCycle:
     keq: np.ndarray
 
     def plot(self):
-        """The hysteresis loops F(x) (the paper's Fig 2 / Fig 6 style)."""
+        """Return the plot of the hysteresis loops F(x) (the paper's Fig 2 / Fig 6 style).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure of :func:`servotune.plots.plot_hysteresis`.
+        """
         from .. import plots
 
         return plots.plot_hysteresis(self)
@@ -700,6 +895,7 @@ def lugre_cycle(params: LuGreParameters, amplitude, omega,
     Parameters
     ----------
     params : LuGreParameters
+        The LuGre element.
     amplitude : array_like
         Displacement amplitudes A [m], > 0.
     omega : array_like
@@ -712,6 +908,14 @@ def lugre_cycle(params: LuGreParameters, amplitude, omega,
     Returns
     -------
     HysteresisCycle
+        The cycle over one period, batch shape the broadcast shape of ``amplitude`` and
+        ``omega``.
+
+    Raises
+    ------
+    ValueError
+        If an amplitude or frequency is not finite and > 0, or ``n_steps`` is not a multiple
+        of 4 >= 8.
 
     Notes
     -----
