@@ -64,7 +64,6 @@ NOT_YET_CHECKED = (
     "servotune.axis", "servotune.cli.nlcompliance",
     "servotune.harmonic",
     "servotune.simulate.integrator",
-    "servotune.simulate.simulator", "servotune.simulate.system",
 )
 
 #: The entry points a reader starts from: See Also required, linking to one another.

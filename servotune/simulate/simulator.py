@@ -54,13 +54,22 @@ class NonlinearAxis:
     Parameters
     ----------
     structure : ModalModel
+        The reduced structure (mass, damping, stiffness over named DOFs).
     drive : Drive, optional
         The cascade (None: the structure alone, motor DOFs free).
     pads : sequence of str
         The guide-way pad DOFs (relative X); the friction law's totals are shared equally.
     friction : PadFriction, optional
         :class:`~servotune.simulate.LuGreFriction`, :class:`~servotune.simulate.ViscousFriction`
-        or another law; None for frictionless pads.
+        or another law, with axis-total parameters; None for frictionless pads.
+
+    Raises
+    ------
+    ValueError
+        A structure that is not a :class:`ModalModel`, a drive that is not a :class:`Drive`, a
+        friction that is not a :class:`PadFriction`, or a friction law without pads.
+    UnknownDofError
+        A pad the structure does not have.
     """
 
     structure: ModalModel
@@ -111,21 +120,27 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
              window=(), progress=False) -> SimulationResult:
     """Integrate the nonlinear axis through a scenario, from rest.
 
+    The linear part (:func:`~servotune.simulate.system.axis_system`) is diagonalised once and
+    integrated exactly; the friction remainders at the pads are collocated implicitly (Radau)
+    within each step (:mod:`servotune.simulate.integrator`).
+
     Parameters
     ----------
     axis : NonlinearAxis
+        Structure, drive, pads and friction law.
     scenario : Scenario
-        See :mod:`servotune.simulate.scenario` (sine sweeps, moves, sinusoids, circles, custom).
+        See :mod:`servotune.simulate.scenario` (sine sweeps, moves, sinusoids, circles, custom);
+        its duration must be a whole multiple of ``step``.
     step : float
         Base integration step [s] (default 2.5e-4 s, 40 steps per cycle at 100 Hz). The linear
         dynamics are exact for any step; the step resolves the excitation. Where the friction
         needs it (break-away, reversals, stick-slip) steps are halved, down to step/256.
+    record_step : float
+        Interval of the recorded histories [s], a whole multiple of ``step``.
     tolerance : float
         Local error allowed per step in the pad motion, relative to the Stribeck velocity vs
         and the presliding deflection Fs/sigma0 (default 1e-4: window energies within 0.1 %
         of a tight reference in the tests).
-    record_step : float
-        Interval of the recorded histories [s], a multiple of ``step``.
     window : sequence of float
         Extra times [s] where the energies are checkpointed (they are every 0.05 s anyway),
         e.g. the ends of an energy window.
@@ -135,14 +150,27 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     Returns
     -------
     SimulationResult
+        The histories every ``record_step`` (plant outputs, pad signals, the scenario's
+        inputs), the cumulative works and the energies at the checkpoints, and statistics
+        (steps, Newton iterations, wall time).
 
     Raises
     ------
     SimulationError
-        When a step cannot be completed even at 1/256 of its length; the exception carries the
-        partial result (``.result``) and the time reached (``.time``).
+        When a step cannot be completed even at 1/256 of its length (or the state becomes
+        non-finite); the exception carries the partial result (``.result``) and the time
+        reached (``.time``).
     ValueError
-        Bad arguments (unknown force DOF, record step not a multiple of the step, ...).
+        Bad arguments: ``axis`` not a :class:`NonlinearAxis` or ``scenario`` not a
+        :class:`~servotune.simulate.scenario.Scenario`, a step or tolerance not positive, a
+        duration, record step or window time not a whole multiple of the step, a scenario
+        force on a DOF the structure does not have, or a move of an axis without drive.
+
+    See Also
+    --------
+    servotune.frequency.compliance : The linearised axis' compliance, which a sweep checks.
+    servotune.friction.equivalent.describing_function : The linear equivalent of the friction.
+    servotune.analysis.loop_report : The loops' margins of the linearised axis.
     """
     if not isinstance(axis, NonlinearAxis):
         raise ValueError("simulate() needs a NonlinearAxis")

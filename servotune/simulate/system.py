@@ -99,6 +99,7 @@ class AxisSystem:
 
     @property
     def n_states(self) -> int:
+        """Number of states n of :attr:`system`."""
         return self.system.nstates
 
 
@@ -117,6 +118,7 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     Parameters
     ----------
     structure : ModalModel
+        The reduced structure.
     drive : Drive, optional
         The cascade (None: no control, the motor DOFs are free).
     friction : PadFriction, optional
@@ -132,6 +134,15 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     Returns
     -------
     AxisSystem
+        The linear system with its known and remainder inputs, and the rows of the energy
+        balance.
+
+    Raises
+    ------
+    ValueError
+        A friction law without pads, or an input in ``inputs`` the axis does not have.
+    UnknownDofError
+        A pad, motor or encoder DOF the structure does not have.
     """
     pads = tuple(pads)
     structure.index(list(pads))
