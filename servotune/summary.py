@@ -252,9 +252,10 @@ def loops_table(job) -> Table | None:
                  "with speed makes the open loop need a minimum gain)"]
     else:
         notes = []
-    notes += [c.text for c in r.checks if c.requirement in (
-        "loop hierarchy", "Ti and velocity bandwidth", "current loop above")
-        and c.model == ref]
+    # every requirement judged on the reference model that the rows above do not show (the
+    # loop hierarchy, Ti, the current loop, and any requirement added as a module)
+    notes += [c.text for c in r.checks if c.model == ref and c.requirement not in (
+        "stability", "Ms velocity loop", "Ms position loop")]
     if r.stats.current_loop_bandwidth_hz:
         notes.append(f"current loop bandwidth {r.stats.current_loop_bandwidth_hz:.4g} Hz "
                      "(rotor held)")

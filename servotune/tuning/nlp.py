@@ -19,7 +19,10 @@ parameters (one column per frequency and regime model; see :mod:`servotune.tunin
                 F_fix,j + C v_j <= (1 - margin) F_avail,j      every thrust case j
                 Kv >= Kv_min,  bounds on every u_v
 
-h_m is the work-piece compliance, L_v and L_p the velocity loop (position loop open) and the
+The rows after the epigraph rows are the registered requirements' (one module each in
+:mod:`servotune.tuning.requirements`, see :mod:`servotune.tuning.constraint`): their loop rows at
+every loop frequency and their rows in the design variables; the statement above is that of the
+shipped ones. h_m is the work-piece compliance, L_v and L_p the velocity loop (position loop open) and the
 position loop (velocity loop closed), T = L/(1 + L), all with the guide ways of model m and the
 digital drive's delays. The conditions "for w <= ..." depend on the design; they are imposed at
 every grid frequency with a smooth gate: ``value + sigma(kappa log(w / w_edge)) >= 0`` with the
@@ -51,28 +54,18 @@ import casadi as ca
 import numpy as np
 
 from .. import interrupt
+from .constraint import LoopQuantities, requirements
+from .gates import GATE_SAFETY, GATE_SHARPNESS
 from .ports import SymbolicPorts, responses
 from .problem import VARIABLES, Design, TuningProblem
 
-__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "GATE_ROWS", "Kernels", "Solver", "Solution",
+__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "Kernels", "Solver", "Solution",
            "gate_parameters", "jit_options", "cache_folder"]
-
-#: kappa of the logistic gates (per unit of log frequency): 5 % past an edge the gate is
-#: 82 % open, 10 % past it 95 %.
-GATE_SHARPNESS = 30.0
-#: Edges of the gated constraints lie this factor beyond the requirement.
-GATE_SAFETY = 1.15
-#: The gated loop constraints, in the order of the kernel's rows after the two Ms rows.
-GATE_ROWS = ("loop hierarchy", "Ti bandwidth min", "Ti bandwidth max", "current loop above")
-
-
-def _sigmoid(y):
-    return 1.0 / (1.0 + ca.exp(-GATE_SHARPNESS * y))
 
 
 def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
                     current_bandwidth: float | None) -> np.ndarray:
-    """Return the per-model constants of the gated rows of the loop kernel.
+    """Return the per-model constants of the requirements' loop rows.
 
     Parameters
     ----------
@@ -86,29 +79,18 @@ def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
     Returns
     -------
     numpy.ndarray
-        One row per regime model: for each gated constraint of ``GATE_ROWS``, whether it
-        applies to the model (1/0) and the log of its edge parameter.
+        One row per regime model: the constants of :meth:`Requirement.gate` of every loop
+        requirement of the problem, in their order (e.g. whether the requirement applies to
+        the model and the log of its edge).
     """
-    req = problem.requirements
-    moving = set(problem.moving_models)
+    gated = [c for c in requirements(problem) if c.gate_size]
     rows = []
     for m in range(len(problem.regimes)):
-        on = 1.0 if m in moving else 0.0
-        n_ratio = req.bandwidth_ratio_min
-        wx = (current_bandwidth / req.current_bandwidth_ratio_min
-              if current_bandwidth and req.current_bandwidth_ratio_min else 1.0)
-        rows.append([
-            on * (n_ratio > 0), math.log(GATE_SAFETY * max(n_ratio, 1.0) * gamma[m]),
-            on * (req.ti_bandwidth_min > 0), math.log(GATE_SAFETY * max(req.ti_bandwidth_min,
-                                                                        1e-9)),
-            on * (req.ti_bandwidth_max > 0), math.log(max(req.ti_bandwidth_max, 1e-9)
-                                                      / GATE_SAFETY),
-            on * (req.current_bandwidth_ratio_min > 0 and current_bandwidth is not None),
-            math.log(wx / GATE_SAFETY)])
-    return np.array(rows)
-
-
-N_GATE_PARAMS = 8
+        row = []
+        for c in gated:
+            row.extend(float(x) for x in c.gate(problem, m, float(gamma[m]), current_bandwidth))
+        rows.append(row)
+    return np.array(rows, dtype=float).reshape(len(problem.regimes), -1)
 
 
 def jit_options() -> dict:
@@ -223,40 +205,35 @@ class Kernels:
         self.band_rows = (["compliance peak"] if w_peak > 0 else []) + (
             ["chatter"] if w_chatter > 0 else [])
         self.loop = self.loop_hessian = None
-        self.loop_rows = []
+        self.loop_rows, self.loop_lower, self.loop_moving_only = [], [], []
         if problem.drive is None:
             return
-        req = problem.requirements
-        d_loop = ca.SX.sym("d", SymbolicPorts.size(problem, N_GATE_PARAMS))
-        ports = SymbolicPorts(problem, d_loop, N_GATE_PARAMS)
+        # the loop rows: each requirement's, in their order (servotune.tuning.requirements)
+        loop_requirements = [c for c in requirements(problem) if c.row_names(problem)]
+        n_gate = sum(c.gate_size for c in requirements(problem))
+        d_loop = ca.SX.sym("d", SymbolicPorts.size(problem, n_gate))
+        ports = SymbolicPorts(problem, d_loop, n_gate)
         resp = responses(problem, ports, values)
-        lv, lp = resp["loop_velocity"], resp["loop_position"]
-        rows = [(1.0 + lv).abs2() * req.ms_limit("velocity") ** 2,
-                (1.0 + lp).abs2() * req.ms_limit("position") ** 2]
-        self.loop_rows = ["Ms velocity loop", "Ms position loop"]
-        lw = ca.log(ports.omega)
-        tv2 = lv.abs2() / (1.0 + lv).abs2()
-        on_h, edge_h, on_lo, edge_lo, on_hi, edge_hi, on_i, edge_i = ports.extra
-        kv = values["kv"]
-        ti = values["ti"]
-        off = 2.0
-        if req.bandwidth_ratio_min > 0:
-            edge = edge_h + ca.log(kv)
-            rows.append((tv2 - 0.5) / (tv2 + 0.5) + _sigmoid(lw - edge) + off * (1 - on_h))
-            self.loop_rows.append(GATE_ROWS[0])
-        if req.ti_bandwidth_min > 0:
-            edge = edge_lo - ca.log(ti)
-            rows.append((tv2 - 0.5) / (tv2 + 0.5) + _sigmoid(lw - edge) + off * (1 - on_lo))
-            self.loop_rows.append(GATE_ROWS[1])
-        if req.ti_bandwidth_max > 0:
-            edge = edge_hi - ca.log(ti)
-            rows.append((0.5 - tv2) / (0.5 + tv2) + _sigmoid(edge - lw)
-                        + _sigmoid(lw - edge - math.log(1.25)) + off * (1 - on_hi))
-            self.loop_rows.append(GATE_ROWS[2])
-        if req.current_bandwidth_ratio_min > 0:
-            rows.append((0.5 - tv2) / (0.5 + tv2) + _sigmoid(edge_i - lw)
-                        + _sigmoid(lw - edge_i - math.log(1.25)) + off * (1 - on_i))
-            self.loop_rows.append(GATE_ROWS[3])
+        lv = resp["loop_velocity"]
+        q = LoopQuantities(lv, resp["loop_position"], lv.abs2() / (1.0 + lv).abs2(),
+                           ca.log(ports.omega), values["kv"], values["ti"])
+        rows = []
+        self.loop_lower, self.loop_moving_only = [], []
+        offsets, at = {}, 0
+        for c in requirements(problem):
+            offsets[c.name] = at
+            at += c.gate_size
+        for c in loop_requirements:
+            gate = ports.extra[offsets[c.name]:offsets[c.name] + c.gate_size]
+            new = c.loop_rows(problem, q, gate)
+            names = c.row_names(problem)
+            if len(new) != len(names):
+                raise ValueError(f"requirement {c.name!r} gave {len(new)} loop rows for "
+                                 f"{len(names)} names")
+            rows += new
+            self.loop_rows += list(names)
+            self.loop_lower += [float(c.lower)] * len(names)
+            self.loop_moving_only += [bool(c.moving_only)] * len(names)
         self.loop, self.loop_hessian = self._pair("loop", u, d_loop, ca.vertcat(*rows))
 
     @staticmethod
@@ -340,7 +317,6 @@ class Solver:
     def __init__(self, problem: TuningProblem, kernels: Kernels, n_band: int, n_loop: int,
                  warm: bool = False, max_iter: int = 500, callback=None):
         self.problem, self.kernels = problem, kernels
-        req = problem.requirements
         x0 = problem.initial_design()
         self.free = free = problem.free
         nf = len(free)
@@ -399,26 +375,22 @@ class Solver:
             params.append(ca.vec(data_loop))
             loops = kernels.loop.map(n_loop * n_models)(p, data_loop)
             all_cols = list(range(n_loop * n_models))
-            # the gated rows apply to the moving models only (elsewhere the kernel switches
-            # them off and they always hold): they are left out of the NLP there
+            # rows of requirements on the moving models only are left out elsewhere (there
+            # the kernel switches them off and they always hold)
             moving = set(problem.moving_models)
             moving_cols = [j for j in all_cols if j // n_loop in moving]
             for i, group in enumerate(kernels.loop_rows):
-                lo = 1.0 if group.startswith("Ms") else 0.0
-                cols = all_cols if group.startswith("Ms") else moving_cols
+                lo = kernels.loop_lower[i]
+                cols = moving_cols if kernels.loop_moving_only[i] else all_cols
                 if not cols:
                     continue
                 row = loops[i, cols].T * mask_loop[cols] + (1.0 - mask_loop[cols]) * (lo + 1.0)
                 add(row, lo, ca.inf, group, [j // n_loop for j in cols], cols)
-        # constraints without frequencies: thrust cases, kv_min
+        # the requirements' rows in the design variables (thrust cases, kv_min, ...)
         rest_start = len(lbg)
-        if problem.thrust is not None and "c" in free:
-            for fixed, speed, usable, name in problem.thrust.linear_form():
-                if speed > 0:
-                    add((fixed + design_value("c") * speed) / usable, -ca.inf, 1.0,
-                        f"thrust: {name}")
-        if "kv" in free and req.kv_min > 0:
-            add(design_value("kv") / req.kv_min, 1.0, ca.inf, "kv_min")
+        for requirement in requirements(problem):
+            for name, expr, lo, hi in requirement.design_rows(problem, design_value):
+                add(ca.vertcat(expr), lo, hi, name)
         objective = 0
         if w_peak > 0:
             objective = w_peak * (tt[0] + problem.mean_weight * ca.sum1(tt[1:]) / len(cut))

@@ -367,19 +367,19 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
     if fl is not None:
         kl = fine.loop.size
         cands = set()
-        for r, row in enumerate(kernels.loop_rows):
-            lo = 1.0 if row.startswith("Ms") else 0.0
+        for r in range(len(kernels.loop_rows)):
+            lo = kernels.loop_lower[r]
             for m in range(n_models):
                 vals = fl[r, m * kl:(m + 1) * kl] - lo
-                if vals.min() < 0.0 or row.startswith("Ms"):
+                if vals.min() < 0.0 or not kernels.loop_moving_only[r]:
                     cands.update(_local_extrema(fine.loop, vals, False,
                                                 3 if vals.min() < 0 else 1))
         add_loop = sorted(cands)
         if add_loop:
             exact = port_data(problem, np.array(add_loop)).rows(grids.gates)
             ev = np.array(kernels.loop.map(exact.shape[1])(u, exact))
-            for r, row in enumerate(kernels.loop_rows):
-                lo = 1.0 if row.startswith("Ms") else 0.0
+            for r in range(len(kernels.loop_rows)):
+                lo = kernels.loop_lower[r]
                 worst = max(worst, -(ev[r] - lo).min() / max(lo, 1.0))
     return add_band, add_loop, worst
 

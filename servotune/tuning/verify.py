@@ -20,15 +20,12 @@ from ..plant import UnstableLoopError, build_plant, loop_transfer
 from ..regimes import RegimeModel
 from ..structure.model import signal_name
 from ..units import HZ_PER_RAD_S
+from .constraint import CHECK_TOLERANCE, RequirementCheck, requirements
 from .problem import Design, TuningProblem
 
 __all__ = ["ModelPerformance", "Performance", "RequirementCheck", "verify",
            "requirement_checks", "CHECK_TOLERANCE"]
 
-#: Relative slack of the dense check on a requirement the optimiser imposed exactly (the grid
-#: exchange converges to this order; the gates of the hierarchy constraints are soft by a few
-#: percent, see :mod:`servotune.tuning.nlp`).
-CHECK_TOLERANCE = {"ms": 0.005, "ratio": 0.02}
 
 
 @dataclass(frozen=True)
@@ -238,53 +235,17 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
     return Performance(tuple(out), moving[0] if moving else 0)
 
 
-@dataclass(frozen=True)
-class RequirementCheck:
-    """One requirement judged on the dense check of one model (or of the axis).
-
-    Parameters
-    ----------
-    requirement : str
-        The requirement (``"stability"``, ``"Ms velocity loop"``, ``"loop hierarchy"``,
-        ``"thrust"``, ``"kv_min"``, ...).
-    model : str or None
-        The regime model's name (the thrust case for ``"thrust"``); None for the axis.
-    value, limit : float or None
-        The value reached and the limit it is judged against.
-    holds : bool
-        Whether the requirement holds.
-    text : str
-        One line for the reader.
-    """
-
-    requirement: str
-    model: str | None
-    value: float | None
-    limit: float | None
-    holds: bool
-    text: str
-
-    def to_dict(self) -> dict:
-        """Return the check as JSON-ready data.
-
-        Returns
-        -------
-        dict
-            The fields by name.
-        """
-        return {"requirement": self.requirement, "model": self.model, "value": self.value,
-                "limit": self.limit, "holds": self.holds, "text": self.text}
-
-
 def requirement_checks(problem: TuningProblem, design: Design, performance: Performance,
                        current_bandwidth: float | None) -> tuple[RequirementCheck, ...]:
     """Return every requirement of the problem judged on a verified performance.
 
-    Per model: stability, and the Ms of each loop against :meth:`Requirements.ms_limit`
-    (0.5 % slack, :data:`CHECK_TOLERANCE`). Per moving model with a velocity loop: the
-    velocity over position bandwidth ratio, Ti times the velocity bandwidth within its range,
-    and the current over velocity bandwidth ratio, each with 2 % slack. Then each thrust case
-    of the thrust budget at the design's C, and Kv against ``kv_min``.
+    Per model: stability, then each requirement's checks in that model
+    (:meth:`Requirement.model_checks` of :mod:`servotune.tuning.requirements`: the Ms of each
+    loop against :meth:`Requirements.ms_limit` with 0.5 % slack; in the moving models the
+    loop hierarchy, Ti times the velocity bandwidth and the current loop above, each with 2 %
+    slack, :data:`CHECK_TOLERANCE`). Then the checks of the design itself
+    (:meth:`Requirement.design_checks`: each thrust case at the design's C, Kv against
+    ``kv_min``).
 
     Parameters
     ----------
@@ -302,9 +263,9 @@ def requirement_checks(problem: TuningProblem, design: Design, performance: Perf
     tuple of RequirementCheck
         The checks, model by model, then thrust and Kv.
     """
-    req = problem.requirements
     out = []
     moving = set(problem.moving_models)
+    active = requirements(problem)
     for i, mp in enumerate(performance.models):
         name = mp.model.name
         if not mp.stable:
@@ -312,56 +273,8 @@ def requirement_checks(problem: TuningProblem, design: Design, performance: Perf
                                         f"{name}: unstable ({mp.reason})"))
             continue
         out.append(RequirementCheck("stability", name, None, None, True, f"{name}: stable"))
-        for loop, la in (("velocity", mp.velocity), ("position", mp.position)):
-            if la is None:
-                continue
-            limit = req.ms_limit(loop)
-            out.append(RequirementCheck(
-                f"Ms {loop} loop", name, la.ms, limit, la.ms <= limit * (1 + CHECK_TOLERANCE["ms"]),
-                f"{name}: Ms of the {loop} loop {la.ms:.3f} (limit {limit:.3f})"))
-        if i not in moving or mp.velocity is None:
-            continue
-        bw_v, bw_p = mp.velocity.bandwidth, mp.position.bandwidth
-        slack = 1 - CHECK_TOLERANCE["ratio"]
-        if req.bandwidth_ratio_min > 0:
-            ratio = bw_v / bw_p if bw_p > 0 else math.inf
-            out.append(RequirementCheck(
-                "loop hierarchy", name, ratio, req.bandwidth_ratio_min,
-                bool(ratio >= req.bandwidth_ratio_min * slack),
-                f"{name}: velocity-loop bandwidth {bw_v * HZ_PER_RAD_S:.3g} Hz is {ratio:.3g} "
-                f"times the "
-                f"position loop's {bw_p * HZ_PER_RAD_S:.3g} Hz "
-                f"(at least {req.bandwidth_ratio_min:g})"))
-        ti = design.ti
-        if ti is not None and math.isfinite(bw_v) and (req.ti_bandwidth_min
-                                                       or req.ti_bandwidth_max):
-            value = ti * bw_v
-            lo_ok = value >= req.ti_bandwidth_min * slack
-            hi_ok = not req.ti_bandwidth_max or value <= req.ti_bandwidth_max / slack
-            out.append(RequirementCheck(
-                "Ti and velocity bandwidth", name, value,
-                req.ti_bandwidth_min if not lo_ok else (req.ti_bandwidth_max or None),
-                bool(lo_ok and hi_ok),
-                f"{name}: Ti times the velocity-loop bandwidth ({bw_v * HZ_PER_RAD_S:.3g} Hz) is "
-                f"{value:.3g} (within [{req.ti_bandwidth_min:g}, "
-                f"{req.ti_bandwidth_max or math.inf:g}])"))
-        if req.current_bandwidth_ratio_min > 0 and current_bandwidth is not None:
-            ratio = current_bandwidth / bw_v if bw_v > 0 else math.inf
-            out.append(RequirementCheck(
-                "current loop above", name, ratio, req.current_bandwidth_ratio_min,
-                bool(ratio >= req.current_bandwidth_ratio_min * slack),
-                f"{name}: current-loop bandwidth {current_bandwidth * HZ_PER_RAD_S:.3g} Hz "
-                f"is {ratio:.3g} "
-                f"times the velocity loop's (at least {req.current_bandwidth_ratio_min:g})"))
-    if problem.thrust is not None:
-        for case in problem.thrust.cases(design.c):
-            out.append(RequirementCheck(
-                "thrust", case.name, case.needed, case.usable, case.fits,
-                f"thrust at {case.name}: needs {case.needed / 1e3:.3g} kN of "
-                f"{case.usable / 1e3:.3g} kN usable ({case.thrust_kind}, "
-                f"{problem.thrust.margin:.0%} kept in reserve)"))
-    if design.kv is not None and req.kv_min > 0:
-        out.append(RequirementCheck("kv_min", None, design.kv, req.kv_min,
-                                    design.kv >= req.kv_min * (1 - 1e-9),
-                                    f"Kv {design.kv:.4g} 1/s (at least {req.kv_min:.4g})"))
+        for requirement in active:
+            out += requirement.model_checks(problem, design, mp, i in moving, current_bandwidth)
+    for requirement in active:
+        out += requirement.design_checks(problem, design)
     return tuple(out)

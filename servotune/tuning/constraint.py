@@ -1,0 +1,312 @@
+"""A requirement as the tuner sees it, and the registry the requirements join by subclassing.
+
+A requirement is one class on :class:`Requirement` in a module of the package
+:mod:`servotune.tuning.requirements`. Defining the class registers it (``__init_subclass__``);
+the package imports every module it holds, so a new requirement is one new module: the NLP
+(:mod:`servotune.tuning.nlp`), the dense check
+(:func:`servotune.tuning.verify.requirement_checks`), the grid exchange and the reports (which
+show each :class:`RequirementCheck`'s text) find it through :func:`requirements`.
+
+A requirement gives:
+
+* **how the NLP imposes it**: rows at every loop frequency (:meth:`Requirement.loop_rows` of
+  the velocity and position loops there, each ``>= lower``, named by
+  :meth:`Requirement.row_names`), with per-model constants (:attr:`Requirement.gate_size` of
+  them, from :meth:`Requirement.gate`: e.g. whether it applies to the model and the edge of
+  the band in which it holds), and/or rows in the design variables
+  (:meth:`Requirement.design_rows`);
+* **how the dense check verifies it**: :meth:`Requirement.model_checks` on the python-control
+  analysis of each regime model, or :meth:`Requirement.design_checks` once for the design;
+* **how the report shows it**: the text of each check it returns.
+
+Its settings are fields of :class:`servotune.requirements.Requirements` (the ``[requirements]``
+of an axis) or, for a requirement added as a module, class attributes of its own.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import pkgutil
+from dataclasses import dataclass
+
+__all__ = ["Requirement", "RequirementCheck", "LoopQuantities", "requirements",
+           "REQUIREMENTS_PACKAGE", "CHECK_TOLERANCE"]
+
+#: The package whose modules are imported to discover the requirements.
+REQUIREMENTS_PACKAGE = "servotune.tuning.requirements"
+
+_REGISTRY: dict[str, type] = {}
+
+#: Relative slack of the dense check on a requirement the optimiser imposed exactly (the grid
+#: exchange converges to this order; the gates of the hierarchy constraints are soft by a few
+#: percent, see :mod:`servotune.tuning.nlp`).
+CHECK_TOLERANCE = {"ms": 0.005, "ratio": 0.02}
+
+
+@dataclass(frozen=True)
+class RequirementCheck:
+    """One requirement judged on the dense check of one model (or of the axis).
+
+    Parameters
+    ----------
+    requirement : str
+        The requirement (``"stability"``, ``"Ms velocity loop"``, ``"loop hierarchy"``,
+        ``"thrust"``, ``"kv_min"``, ...).
+    model : str or None
+        The regime model's name (the thrust case for ``"thrust"``); None for the axis.
+    value, limit : float or None
+        The value reached and the limit it is judged against.
+    holds : bool
+        Whether the requirement holds.
+    text : str
+        One line for the reader.
+    """
+
+    requirement: str
+    model: str | None
+    value: float | None
+    limit: float | None
+    holds: bool
+    text: str
+
+    def to_dict(self) -> dict:
+        """Return the check as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            The fields by name.
+        """
+        return {"requirement": self.requirement, "model": self.model, "value": self.value,
+                "limit": self.limit, "holds": self.holds, "text": self.text}
+
+
+
+
+class LoopQuantities:
+    """The symbolic loop quantities at one frequency that loop rows are written in (casadi).
+
+    Attributes
+    ----------
+    lv, lp : casadi complex pair
+        The velocity loop (position loop open) and the position loop (velocity loop closed),
+        with ``.re``, ``.im``, ``.abs2()`` and arithmetic (:mod:`servotune.tuning.ports`).
+    tv2 : casadi.SX
+        ``|T_v|^2 = |L_v|^2 / |1 + L_v|^2``.
+    log_omega : casadi.SX
+        ``log(omega)`` of the frequency [rad/s].
+    kv, ti : casadi.SX
+        The design's Kv [1/s] and Ti [s] (symbols when free, numbers when fixed).
+    """
+
+    def __init__(self, lv, lp, tv2, log_omega, kv, ti):
+        self.lv, self.lp, self.tv2, self.log_omega, self.kv, self.ti = (lv, lp, tv2, log_omega,
+                                                                         kv, ti)
+
+
+class Requirement:
+    """Base class of a requirement the tuner imposes and the dense check verifies.
+
+    Subclasses set :attr:`name` (the constraint group's name, unique, as reports and errors
+    name it) and :attr:`order` (where its rows and checks come among the others), and implement
+    the methods of their kind (see the module docstring). Instances are not made: the methods
+    are class methods of the registered class.
+    """
+
+    #: Name of the constraint group (rows and checks).
+    name: str = ""
+    #: Sort key among the registered requirements.
+    order: float = 0.0
+    #: Loop rows hold as ``row >= lower``.
+    lower: float = 0.0
+    #: Number of per-model constants :meth:`gate` returns (loop rows only).
+    gate_size: int = 0
+    #: Whether the rows apply only to the moving models (sliding or viscous pads).
+    moving_only: bool = False
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        _complete_docstrings(cls)
+        if not cls.name:
+            return
+        other = _REGISTRY.get(cls.name)
+        if other is not None and (other.__module__, other.__qualname__) != (
+                cls.__module__, cls.__qualname__):
+            raise TypeError(f"a requirement named {cls.name!r} is registered already "
+                            f"({other.__module__}.{other.__qualname__})")
+        _REGISTRY[cls.name] = cls
+
+    @classmethod
+    def applies(cls, problem) -> bool:
+        """Return whether the problem asks for this requirement.
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem (its requirements, drive and models).
+
+        Returns
+        -------
+        bool
+            True when its rows and checks are part of the problem.
+        """
+        return True
+
+    @classmethod
+    def gate(cls, problem, model: int, gamma: float, current_bandwidth) -> tuple[float, ...]:
+        """Return the per-model constants of the loop row (``gate_size`` of them).
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem.
+        model : int
+            Index of the regime model.
+        gamma : float
+            The model's position-loop bandwidth over Kv.
+        current_bandwidth : float or None
+            Bandwidth of the current loop [rad/s].
+
+        Returns
+        -------
+        tuple of float
+            The constants, read by :meth:`loop_rows` as ``gate``.
+        """
+        return ()
+
+    @classmethod
+    def row_names(cls, problem) -> tuple[str, ...]:
+        """Return the names of the loop rows (none: no rows at the loop frequencies).
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem.
+
+        Returns
+        -------
+        tuple of str
+            One name per row of :meth:`loop_rows`, in its order.
+        """
+        return ()
+
+    @classmethod
+    def loop_rows(cls, problem, q: LoopQuantities, gate) -> list:
+        """Return the rows at one loop frequency (each ``>= lower`` when the requirement holds).
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem.
+        q : LoopQuantities
+            The loops at the frequency.
+        gate : list of casadi.SX
+            The per-model constants of :meth:`gate`.
+
+        Returns
+        -------
+        list of casadi.SX
+            One row per name of :meth:`row_names`.
+        """
+        return []
+
+    @classmethod
+    def design_rows(cls, problem, value) -> list:
+        """Return the rows in the design variables.
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem.
+        value : callable
+            ``value(name)``: the design variable ``name`` (c, kv, kp, ti) as a casadi
+            expression (free) or a number (fixed).
+
+        Returns
+        -------
+        list of (str, casadi.MX, float, float)
+            (row name, expression, lower bound, upper bound) for each row.
+        """
+        return []
+
+    @classmethod
+    def model_checks(cls, problem, design, performance, moving: bool,
+                     current_bandwidth) -> list:
+        """Return the dense check of the requirement in one (stable) regime model.
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem.
+        design : servotune.tuning.Design
+            The design.
+        performance : servotune.tuning.ModelPerformance
+            The python-control analysis of the model.
+        moving : bool
+            Whether the model's pads move (sliding or viscous).
+        current_bandwidth : float or None
+            Bandwidth of the current loop [rad/s].
+
+        Returns
+        -------
+        list of servotune.tuning.RequirementCheck
+            One check per judged quantity (none when it does not apply to the model).
+        """
+        return []
+
+    @classmethod
+    def design_checks(cls, problem, design) -> list:
+        """Return the check of the requirement on the design itself (no model).
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem.
+        design : servotune.tuning.Design
+            The design.
+
+        Returns
+        -------
+        list of servotune.tuning.RequirementCheck
+            The checks.
+        """
+        return []
+
+
+def _complete_docstrings(cls) -> None:
+    """Give each method a subclass overrides with a one-paragraph docstring the sections of
+    the base method's (its parameters and results are the interface's)."""
+    for attr, value in vars(cls).items():
+        func = getattr(value, "__func__", value)
+        base = getattr(Requirement, attr, None)
+        if not callable(func) or base is None or attr.startswith("_"):
+            continue
+        own = inspect.cleandoc(func.__doc__ or "")
+        base_doc = inspect.cleandoc(getattr(base, "__doc__", "") or "")
+        if not own or "\n\n" in own.strip() or "\n\n" not in base_doc:
+            continue
+        func.__doc__ = own + "\n\n" + base_doc.split("\n\n", 1)[1]
+
+
+def requirements(problem=None) -> tuple[type, ...]:
+    """Return the registered requirements in their order (those the problem asks for).
+
+    Parameters
+    ----------
+    problem : servotune.tuning.TuningProblem, optional
+        When given, only the requirements that apply to it.
+
+    Returns
+    -------
+    tuple of type
+        :class:`Requirement` subclasses, sorted by ``order``.
+    """
+    package = importlib.import_module(REQUIREMENTS_PACKAGE)
+    for info in pkgutil.iter_modules(package.__path__):
+        if not info.name.startswith("_"):
+            importlib.import_module(f"{REQUIREMENTS_PACKAGE}.{info.name}")
+    found = sorted(_REGISTRY.values(), key=lambda c: (c.order, c.name))
+    if problem is None:
+        return tuple(found)
+    return tuple(c for c in found if c.applies(problem))

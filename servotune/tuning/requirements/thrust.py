@@ -1,0 +1,43 @@
+"""The thrust budget: what the motor must push, C v included, within its usable thrust.
+
+A viscous guide-way damper C resists feeding: its force C v adds to the process force,
+friction and acceleration the motor must supply. Each case of the budget
+(:class:`servotune.thrust.ThrustBudget`: feeding at each feed speed, rapid traverse,
+acceleration) is a row linear in C: ``(F_fix + C v) / F_usable <= 1``.
+"""
+
+from __future__ import annotations
+
+from ..constraint import Requirement, RequirementCheck
+
+__all__ = ["ThrustBudget"]
+
+
+class ThrustBudget(Requirement):
+    """Every thrust case within the motor's usable thrust (the reserve kept)."""
+
+    name = "thrust"
+    order = 50.0
+
+    @classmethod
+    def applies(cls, problem) -> bool:
+        """Return whether the problem has a thrust budget."""
+        return problem.thrust is not None
+
+    @classmethod
+    def design_rows(cls, problem, value) -> list:
+        """Return ``(F_fix + C v) / F_usable <= 1`` for each case with a speed, C free."""
+        if "c" not in problem.free:
+            return []
+        return [(f"thrust: {name}", (fixed + value("c") * speed) / usable, -float("inf"), 1.0)
+                for fixed, speed, usable, name in problem.thrust.linear_form() if speed > 0]
+
+    @classmethod
+    def design_checks(cls, problem, design) -> list:
+        """Return each thrust case at the design's C."""
+        return [RequirementCheck(
+            cls.name, case.name, case.needed, case.usable, case.fits,
+            f"thrust at {case.name}: needs {case.needed / 1e3:.3g} kN of "
+            f"{case.usable / 1e3:.3g} kN usable ({case.thrust_kind}, "
+            f"{problem.thrust.margin:.0%} kept in reserve)")
+            for case in problem.thrust.cases(design.c)]
