@@ -26,9 +26,12 @@ microseconds on the pads; r holds what is left of the LuGre law, stiff while the
   ringing) and stiffly accurate. Newton starts from the line through the previous step's
   stage values and stops when its update, or the error left after it as estimated from the
   contraction of the updates, is below the Newton tolerance (Hairer and Wanner, sec IV.8).
-* A step whose Newton iteration does not converge (e.g. at a violent break-away) is redone as
-  two half steps, recursively down to 1/256 of the step; below that the integration stops with
-  :class:`SimulationError`.
+* A step whose Newton iteration does not converge (e.g. at a violent break-away), or whose
+  error estimate (the deviation of r from its line, propagated to the pad outputs) exceeds the
+  tolerance, is redone as two half steps, recursively down to 1/256 of the step; below that the
+  integration stops (:func:`servotune.simulate.simulator.simulate` raises
+  :class:`~servotune.simulate.result.SimulationError`). Steps grow back, one level at a time,
+  where the error is well below the tolerance.
 * Every matrix-vector product of the step (known inputs onto the modes, modes onto the pad
   outputs, the powers and the recorded outputs) runs with its long loop innermost over
   transposed matrices, which the compiler vectorises without reordering any sum: the results
@@ -76,12 +79,24 @@ MAX_NEWTON = 12
 
 
 def phi_functions(z, order: int = 4) -> np.ndarray:
-    """phi_1(z) ... phi_order(z) for complex z, shape z.shape + (order,).
+    """Return the phi-functions phi_1(z) ... phi_order(z) of complex arguments.
 
     ``phi_k(z) = int_0^1 e^{(1-s) z} s^(k-1)/(k-1)! ds = sum_j z^j / (j + k)!``: the Taylor
     series for |z| < 1 (where the recurrence would cancel), else the recurrence
     ``phi_{k+1}(z) = (phi_k(z) - 1/k!) / z`` from phi_0 = e^z (Hochbruck and Ostermann 2010,
     sec 2.1), which loses at most a few digits of the last place for |z| >= 1.
+
+    Parameters
+    ----------
+    z : array_like
+        Complex arguments (lambda t, dimensionless), any shape.
+    order : int
+        Highest k.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex, shape ``z.shape + (order,)``: ``[..., k - 1]`` is phi_k(z).
 
     Examples
     --------
@@ -125,6 +140,24 @@ class ModalForm:
 
 def modal_form(a: np.ndarray, times=(1e-4, 1e-2), check: float = 1e-7) -> ModalForm:
     """Diagonalise a real A after balancing; check the flow against ``expm``.
+
+    Parameters
+    ----------
+    a : (n, n) array_like
+        Real system matrix A [1/s].
+    times : sequence of float
+        Times t [s] at which the modal flow ``Re(V diag(e^{lambda t}) V^-1)`` is checked
+        against ``scipy.linalg.expm(A t)`` (the steps the integration will use).
+    check : float
+        Largest relative error of that flow allowed (relative to the largest entry of
+        e^{A t}).
+
+    Returns
+    -------
+    ModalForm
+        The eigenvalues with Im >= 0 (m <= n of them), the eigenvectors (conjugate pairs with
+        a factor 2, so that ``X = Re(vectors @ xi)``), the matching rows of V^-1 and the
+        1-norm condition number of the balanced eigenvector matrix.
 
     Raises
     ------
@@ -185,13 +218,32 @@ def _lagrange_coefficients(nodes: np.ndarray) -> np.ndarray:
 
 
 def step_weights(lam: np.ndarray, h: float, cy_br=None, levels: int = MAX_LEVEL) -> StepWeights:
-    """Weights for steps h/2^L (see :class:`StepWeights` and the module docstring).
+    """Return the exponential and collocation weights of steps h/2^L, L = 0..levels.
 
-    ``cy_br = (C_y V (2 n_r, m), V^-1 B_r (m, n_r))`` for the nonlinear inputs, or None.
-
-    The error weight gamma = int_0^h e^{lambda (h - s)} (s/h - 1/3)(s/h - 1) ds propagates the
+    See :class:`StepWeights` and the module docstring. The weights are the integrals
+    ``int_0^{c h} e^{lambda (c h - s)} p(s) ds`` of the Lagrange polynomials p of the known
+    inputs (nodes 0, 1/3, 2/3, 1) and of the remainders (Radau nodes 1/3, 1), from the
+    phi-functions (Hochbruck and Ostermann 2010, sec 2.3). The error weight
+    gamma = int_0^h e^{lambda (h - s)} (s/h - 1/3)(s/h - 1) ds propagates the
     deviation of r from its line through the stage values, ``e(s) = r''/2 (s - h/3)(s - h)``,
     to the end of the step.
+
+    Parameters
+    ----------
+    lam : (m,) array_like
+        Eigenvalues lambda [1/s] of the modal form.
+    h : float
+        Base step [s].
+    cy_br : tuple of numpy.ndarray, optional
+        ``(C_y V (2 n_r, m), V^-1 B_r (m, n_r))`` for the nonlinear inputs, or None (no
+        remainder: ``kmat`` and ``kerr`` are empty).
+    levels : int
+        Deepest level L (steps down to h/2^levels).
+
+    Returns
+    -------
+    StepWeights
+        Arrays over the ``levels + 1`` levels.
     """
     lam = np.asarray(lam, dtype=complex)
     m = lam.size
@@ -297,7 +349,22 @@ def _solve_small(a, x, n):
 
 @numba.njit(cache=True, fastmath=_FAST)
 def sum_of_squares(rows_re, rows_im, xr, xm):
-    """sum_q (Re(rows[q] . xi))^2 for xi = xr + i xm (energies at checkpoints)."""
+    """Return sum_q (Re(rows[q] . xi))^2 for xi = xr + i xm (energies at checkpoints).
+
+    Compiled (numba).
+
+    Parameters
+    ----------
+    rows_re, rows_im : (k, m) numpy.ndarray
+        Real and imaginary parts of the rows (e.g. ``energy_rows @ V``).
+    xr, xm : (m,) numpy.ndarray
+        Real and imaginary parts of the modal coordinates xi.
+
+    Returns
+    -------
+    float
+        The sum of squares (twice the energy [J] for the energy rows).
+    """
     total = 0.0
     for q in range(rows_re.shape[0]):
         acc = 0.0
@@ -378,8 +445,71 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
     then runs with the loop over the modes (or the rows) innermost, which the compiler
     vectorises without reordering any sum.
 
-    Returns (base steps completed, level): fewer steps than asked means a step failed at the
-    deepest level.
+    Parameters
+    ----------
+    h : float
+        Base step [s].
+    n0, n1 : int
+        First base step and the one after the last (absolute indices from t = 0).
+    record_every : int
+        Base steps between records.
+    level : int
+        Step level to start with (step h / 2^level).
+    xr, xm : (m,) numpy.ndarray
+        Modal coordinates, real and imaginary parts; updated in place.
+    r_last : (2 n_r,) numpy.ndarray
+        Remainders at the two stages of the last step; updated in place.
+    energy, power : (4,) numpy.ndarray
+        Cumulative works [J] and current powers [W] of :data:`N_POWERS` channels; updated in
+        place.
+    samples : (K, nu) numpy.ndarray
+        Known inputs sampled every h/3 from t = 0 (three spare samples at the end).
+    but_re, but_im : (nu, m) numpy.ndarray
+        ``(V^-1 B_u)^T``.
+    brt_re, brt_im : (n_r, m) numpy.ndarray
+        ``(V^-1 B_r)^T``.
+    cyt_re, cyt_im : (m, 2 n_r) numpy.ndarray
+        ``(C_y V)^T``: the velocity and state each remainder input reads.
+    prop_re, prop_im, alpha_re, alpha_im, beta_re, beta_im : numpy.ndarray
+        :class:`StepWeights` ``prop``, ``alpha``, ``beta`` (real and imaginary parts).
+    kmat, kerr : numpy.ndarray
+        :class:`StepWeights` ``kmat`` and ``kerr``.
+    rparams : numpy.ndarray
+        Parameters of the law's remainder
+        (:meth:`~servotune.friction.law.FrictionLaw.remainder_parameters`).
+    r_tol : float
+        Newton tolerance on the remainders [m/s].
+    err_scale : (2 n_r,) numpy.ndarray
+        Scales of the pad velocities [m/s] and states of the error estimate.
+    tol : float
+        Local error allowed per step, relative to ``err_scale``.
+    cpt_re, cpt_im : (m, rows) numpy.ndarray
+        Map from the modal coordinates to the power rows, transposed.
+    dpu, dpr : numpy.ndarray
+        Feed-through of the known inputs and the remainders into the power rows.
+    n_force : int
+        Number of work-piece forces.
+    force_idx : numpy.ndarray
+        Their indices among the known inputs.
+    n_pads : int
+        Number of pads (remainder input k is component ``k // n_pads``).
+    cot_re, cot_im : (m, n_out) numpy.ndarray
+        Map from the modal coordinates to the recorded outputs, transposed.
+    dou, dor : numpy.ndarray
+        Feed-through of the known inputs and the remainders into the outputs.
+    rec_out : (n_rec, n_out) numpy.ndarray
+        Recorded outputs of this chunk; filled in place.
+    rec_energy : (n_rec, 4) numpy.ndarray
+        Recorded cumulative works [J]; filled in place.
+    stats : (4,) numpy.ndarray of int64
+        Counters, incremented in place.
+
+    Returns
+    -------
+    steps : int
+        Base steps completed: fewer than ``n1 - n0`` means a step failed at the deepest level.
+    level : int
+        The step level reached (to start the next chunk with).
     """
     m = xr.size
     nu = samples.shape[1]
@@ -656,6 +786,12 @@ def chunk_kernel(remainder=None):
     numba dispatcher
         :func:`integrate_chunk` compiled with the remainder called directly (a direct call is
         several times faster than a function passed as an argument), cached on disk by numba.
+
+    Raises
+    ------
+    TypeError
+        If ``remainder`` is not a ``numba.njit`` function, or not a module-level function
+        importable by its name.
 
     Notes
     -----
