@@ -131,7 +131,16 @@ class Cutting:
                            positive("Cutting", "feed_per_tooth", self.feed_per_tooth, "m"))
 
     def feed_speeds(self) -> tuple[float, float]:
-        """Slide speeds [m/s] at the two ends of the spindle-speed range: f_z N n / 60."""
+        """Return the slide speeds [m/s] at the two ends of the spindle-speed range.
+
+        The feed speed is ``f_z N n / 60`` with f_z the feed per tooth [m], N the number of
+        teeth of the cutter and n the spindle speed [rpm].
+
+        Returns
+        -------
+        tuple of float
+            ``(v_low, v_high)`` [m/s] at ``speed_rpm[0]`` and ``speed_rpm[1]``.
+        """
         return tuple(self.feed_per_tooth * self.setup.teeth * n / 60.0 for n in self.speed_rpm)
 
 
