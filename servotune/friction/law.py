@@ -185,7 +185,9 @@ class FrictionLaw:
         Raises
         ------
         ValueError
-            If amplitude or omega is not positive, or the law has no periodic force.
+            If amplitude or omega is not positive and finite.
+        NotImplementedError
+            If the law has no :meth:`periodic_force`.
         """
         amplitude, omega = float(amplitude), float(omega)
         if not (amplitude > 0 and omega > 0 and math.isfinite(amplitude * omega)):

@@ -239,7 +239,8 @@ def lugre_periodic_state(params: LuGreParameters, velocity, period: float
     TypeError
         If ``params`` are not :class:`LuGreParameters`.
     ValueError
-        If the period is not positive or the velocity not a finite 1-D array.
+        If the period is not finite and positive, or the velocity is not a finite 1-D or 2-D
+        array of at least 2 samples per period.
 
     See Also
     --------
@@ -337,7 +338,8 @@ def lugre_periodic_jacobian(params: LuGreParameters, velocity, period: float, ba
     Raises
     ------
     TypeError, ValueError
-        As :func:`lugre_periodic_state`.
+        As :func:`lugre_periodic_state`; ValueError also for a ``basis`` that is not of shape
+        (N, m).
 
     See Also
     --------
