@@ -30,7 +30,8 @@ import numpy as np
 import servotune as st
 from servotune import analysis
 from servotune.friction import BIANCHI2014, BIANCHI2014_SPREAD
-from servotune.plant import Contact, GuideWayFriction
+from servotune.friction.guideway import GuideWayFriction
+from servotune.plant import Contact, friction_contact
 
 PAPER_AXIS = Path(__file__).resolve().parents[1] / "models" / "paper_x_axis"
 #: Vibration amplitudes [m] of the describing function: well inside presliding (sigma0 A << Fs),
@@ -67,12 +68,12 @@ def evaluate_case(axis_path: str, params: dict, amplitudes: tuple, frequency_hz:
     w = 2 * math.pi * frequency_hz
     p = friction.lugre
 
-    stiction = analysis.compliance_curve(axis, friction.contact("stiction"), omega=omega)
+    stiction = analysis.compliance_curve(axis, friction_contact(friction, "stiction"), omega=omega)
     ceq, keq = st.describing_function(p, np.asarray(amplitudes, dtype=float), w)
     closed = st.equivalent_damping_stiction(p.fs, p.sigma0, np.asarray(amplitudes), w)
     peaks, where = [], []
     for a, c, k in zip(amplitudes, ceq, keq, strict=True):
-        # as GuideWayFriction.contact("equivalent"): a negative first-harmonic stiffness is
+        # as friction_contact(..., "equivalent"): a negative first-harmonic stiffness is
         # dropped (Contact takes passive elements only)
         curve = analysis.compliance_curve(axis, Contact.equivalent(float(c), max(float(k), 0.0),
                                                                    a), omega=omega)

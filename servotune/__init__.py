@@ -68,7 +68,8 @@ _LAZY = {
     "fit_presliding": ".friction.identify",
     "fit_steady_state": ".friction.identify",
     "Contact": ".plant",
-    "GuideWayFriction": ".plant",
+    "GuideWayFriction": ".friction.guideway",
+    "friction_contact": ".plant",
     "UnstableLoopError": ".plant",
     "build_plant": ".plant",
     "loop_transfer": ".plant",
@@ -133,6 +134,7 @@ __all__ = [
     "Requirements",
     "UnstableLoopError",
     "build_plant",
+    "friction_contact",
     "loop_transfer",
     # frequency
     "ClosedLoopPoles",

@@ -24,6 +24,7 @@ from .plant import (
     build_plant,
     contact_kind,
     contact_kinds,
+    friction_contact,
     loop_transfer,
 )
 from .units import HZ_PER_RAD_S, RAD_S_PER_HZ
@@ -104,7 +105,8 @@ def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
             return spec.build(None, **{p: values[p] for p in spec.parameters})
         axis.pads  # raises the clear error  # noqa: B018
     omega = None if frequency_hz is None else RAD_S_PER_HZ * frequency_hz
-    return axis.friction.contact(kind, amplitude=amplitude, omega=omega, v0=speed, c=c)
+    return friction_contact(axis.friction, kind, amplitude=amplitude, omega=omega, v0=speed,
+                            c=c)
 
 
 def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,

@@ -2,7 +2,7 @@
 
 :func:`load_axis` reads the description into an :class:`Axis` of validated objects: the
 structure as a :class:`~servotune.structure.ModalModel` (``[structure]``), the guide-way friction
-as a :class:`~servotune.plant.GuideWayFriction` (``[friction]``), the cascade as a
+as a :class:`~servotune.friction.guideway.GuideWayFriction` (``[friction]``), the cascade as a
 :class:`~servotune.drive.Drive` (``[drive]``), the milling set-up as :class:`Cutting`
 (``[cutting]``) and the :class:`~servotune.requirements.Requirements` (``[requirements]``).
 Values are SI unless the key says otherwise (``_hz``, ``_deg``, ``_db``, ``_rpm``,
@@ -59,9 +59,9 @@ from .drive import (
     Sampling,
     kv_from_m_per_min_per_mm,
 )
+from .friction.guideway import GuideWayFriction
 from .friction.identify import fit_steady_state, read_friction_csv
 from .friction.law import friction_law, friction_law_names
-from .plant import GuideWayFriction
 from .regimes import Operation
 from .requirements import Requirements
 from .structure.io import MatrixFileError, read_coordinates, read_structure

@@ -2,7 +2,7 @@
 
 A contact kind (:class:`ContactKind`) names a linear model of the guide-way friction for the plant
 (:class:`servotune.plant.Contact`), the parameters it takes and how it is built from the axis'
-friction (:class:`servotune.plant.GuideWayFriction`, whose law is any registered
+friction (:class:`servotune.friction.guideway.GuideWayFriction`, whose law is any registered
 :class:`servotune.friction.law.FrictionLaw`). The plant, the frequency responses, the analyses and
 the command line (``--contact``) take the kinds from here (:func:`contact_kinds`); a new kind is
 one :func:`register_contact_kind`. This module imports nothing numerical, so that the command

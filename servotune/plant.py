@@ -56,13 +56,12 @@ from .contact_kinds import (
     register_contact_kind,
 )
 from .drive import Drive, drive_blocks
-from .friction.law import FrictionLaw, friction_law, friction_law_names
-from .friction.lugre import LuGreParameters
+from .friction.guideway import GuideWayFriction
 from .interconnect import connect
 from .structure.model import ModalModel, signal_name
 from .units import HZ_PER_RAD_S
 
-__all__ = ["Contact", "ContactKind", "ContactParameter", "GuideWayFriction", "build_plant",
+__all__ = ["Contact", "ContactKind", "ContactParameter", "friction_contact", "build_plant",
            "loop_transfer", "CONTACT_KINDS", "CONTACT_PARAMETERS", "UnstableLoopError",
            "contact_kind", "contact_kinds", "register_contact_kind"]
 
@@ -265,108 +264,47 @@ class Contact:
 CONTACT_KINDS = contact_kinds()
 
 
-@dataclass(frozen=True)
-class GuideWayFriction:
-    """The friction of an axis, lumped at its guide-way pads (paper, sec 3).
+def friction_contact(friction: GuideWayFriction, kind: str, amplitude: float | None = None,
+                     omega: float | None = None, v0: float | None = None,
+                     c: float | None = None) -> Contact:
+    """Return the linear contact model of a kind (see :func:`contact_kinds`), axis total.
+
+    ``stiction`` is the law's presliding contact; ``viscous`` the viscous-only damping (or
+    ``c``); ``equivalent`` the law's describing function (Ceq and Keq); ``sliding`` the law
+    linearised at a speed.
 
     Parameters
     ----------
-    pads : tuple of str
-        Relative-X DOFs of the pads; the friction is shared equally among them.
-    lugre : LuGreParameters, optional
-        Axis-total LuGre parameters: the law is then
-        :class:`~servotune.friction.laws.lugre.LuGreFriction`. Filled in from ``law`` when
-        that is LuGre, else None.
-    viscous : float, optional
-        Axis-total damping of the viscous-only model [N s/m] (default: the law's viscous part,
-        :attr:`~servotune.friction.law.FrictionLaw.viscous_part`).
-    law : FrictionLaw, optional
-        The friction law (axis totals), any registered one
-        (:func:`servotune.friction.law.friction_law`); give it or ``lugre``.
+    friction : GuideWayFriction
+        The axis' guide-way friction (its law builds the contact).
+    kind : str
+        A registered contact kind.
+    amplitude : float, optional
+        Vibration amplitude [m] (``equivalent``).
+    omega : float, optional
+        Vibration angular frequency [rad/s] (``equivalent``).
+    v0 : float, optional
+        Sliding speed [m/s], non-zero (``sliding``).
+    c : float, optional
+        Viscous damping [N s/m] (``viscous``; default ``friction.viscous``).
+
+    Returns
+    -------
+    Contact
 
     Raises
     ------
     ValueError
-        Pads not distinct, neither or conflicting ``lugre`` and ``law``, a negative viscous
-        damping.
+        Unknown kind, or a parameter the kind needs is missing.
     """
-
-    pads: tuple[str, ...]
-    lugre: LuGreParameters | None = None
-    viscous: float | None = None
-    law: FrictionLaw | None = None
-
-    def __post_init__(self) -> None:
-        pads = tuple(self.pads)
-        if not pads or len(set(pads)) != len(pads):
-            raise ValueError(f"GuideWayFriction.pads must be distinct DOF names, got {pads!r}")
-        object.__setattr__(self, "pads", pads)
-        law = self.law
-        if law is None:
-            if not isinstance(self.lugre, LuGreParameters):
-                raise ValueError("GuideWayFriction needs a friction law (law=...) or LuGre "
-                                 "parameters (lugre=LuGreParameters(...))")
-            law = friction_law("lugre")(self.lugre)
-        elif not isinstance(law, FrictionLaw):
-            raise ValueError(f"GuideWayFriction.law must be a FrictionLaw (one of "
-                             f"{friction_law_names()}), got {law!r}")
-        lugre = getattr(law, "lugre_parameters", None)
-        if self.lugre is not None and lugre != self.lugre:
-            raise ValueError("GuideWayFriction: give the friction law or the LuGre parameters, "
-                             "not both")
-        object.__setattr__(self, "law", law)
-        object.__setattr__(self, "lugre", lugre)
-        viscous = law.viscous_part if self.viscous is None else float(self.viscous)
-        if not (viscous >= 0 and math.isfinite(viscous)):
-            raise ValueError(f"GuideWayFriction.viscous must be finite and >= 0 N s/m, got "
-                             f"{self.viscous!r}")
-        object.__setattr__(self, "viscous", viscous)
-
-    @property
-    def per_pad(self) -> LuGreParameters:
-        """One pad's share of the LuGre parameters (a LuGre law only)."""
-        if self.lugre is None:
-            raise ValueError(f"the axis' friction law is {self.law.name!r}, not LuGre")
-        return self.lugre.scaled(1.0 / len(self.pads))
-
-    def contact(self, kind: str, amplitude: float | None = None, omega: float | None = None,
-                v0: float | None = None, c: float | None = None) -> Contact:
-        """Return the linear contact model of a kind (see :func:`contact_kinds`), axis total.
-
-        ``stiction`` is the law's presliding contact; ``viscous`` the viscous-only damping (or
-        ``c``); ``equivalent`` the law's describing function (Ceq and Keq); ``sliding`` the law
-        linearised at a speed.
-
-        Parameters
-        ----------
-        kind : str
-            A registered contact kind.
-        amplitude : float, optional
-            Vibration amplitude [m] (``equivalent``).
-        omega : float, optional
-            Vibration angular frequency [rad/s] (``equivalent``).
-        v0 : float, optional
-            Sliding speed [m/s], non-zero (``sliding``).
-        c : float, optional
-            Viscous damping [N s/m] (``viscous``; default :attr:`viscous`).
-
-        Returns
-        -------
-        Contact
-
-        Raises
-        ------
-        ValueError
-            Unknown kind, or a parameter the kind needs is missing.
-        """
-        spec = contact_kind(kind)
-        values = {"c": c, "amplitude": amplitude, "speed": v0,
-                  "frequency_hz": None if omega is None else HZ_PER_RAD_S * omega}
-        missing = spec.missing(values)
-        if missing:
-            raise ValueError(f"the {kind!r} contact needs {_listing(spec.required)} "
-                             f"({spec.purpose})")
-        return spec.build(self, **{p: values[p] for p in spec.parameters})
+    spec = contact_kind(kind)
+    values = {"c": c, "amplitude": amplitude, "speed": v0,
+              "frequency_hz": None if omega is None else HZ_PER_RAD_S * omega}
+    missing = spec.missing(values)
+    if missing:
+        raise ValueError(f"the {kind!r} contact needs {_listing(spec.required)} "
+                         f"({spec.purpose})")
+    return spec.build(friction, **{p: values[p] for p in spec.parameters})
 
 
 def _listing(names) -> str:

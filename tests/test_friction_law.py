@@ -12,8 +12,9 @@ from scipy.integrate import solve_ivp
 
 import servotune.friction.laws as laws_package
 from servotune.friction import LuGreParameters
+from servotune.friction.guideway import GuideWayFriction
 from servotune.friction.law import FrictionLaw, friction_law, friction_law_names
-from servotune.plant import Contact, GuideWayFriction, contact_kinds
+from servotune.plant import Contact, contact_kinds, friction_contact
 from servotune.simulate import NonlinearAxis, axis_system, simulate, sine_sweep
 
 # A law in its own module: a Maxwell element (spring k in series with a damper k/c) written as a
@@ -115,11 +116,11 @@ def test_a_new_module_is_a_new_law_for_the_contacts_and_the_axis_file(toy_law, t
     law = toy.from_table({"k": 2.0e8})
     friction = GuideWayFriction(PADS, law=law, viscous=10.0)
     assert friction.lugre is None
-    stiction = friction.contact("stiction")
+    stiction = friction_contact(friction, "stiction")
     assert (stiction.stiffness, stiction.damping) == (2.0e8, 0.0)
-    assert friction.contact("viscous").damping == 10.0
+    assert friction_contact(friction, "viscous").damping == 10.0
     with pytest.raises(ValueError, match="no sliding linearisation"):
-        friction.contact("sliding", v0=0.01)
+        friction_contact(friction, "sliding", v0=0.01)
     assert set(contact_kinds()) >= {"locked", "stiction", "viscous", "equivalent", "sliding",
                                     "free"}
 
@@ -128,9 +129,9 @@ def test_the_lugre_contacts_are_the_lugre_linearisations():
     p = LuGreParameters.named("bianchi2014")
     friction = GuideWayFriction(PADS, p)
     assert friction.law.name == "lugre"
-    assert friction.contact("stiction") == Contact("stiction", stiffness=p.sigma0,
-                                                   damping=p.sigma1 + p.sigma2,
-                                                   note=friction.contact("stiction").note)
+    assert friction_contact(friction, "stiction") == Contact(
+        "stiction", stiffness=p.sigma0, damping=p.sigma1 + p.sigma2,
+        note=friction_contact(friction, "stiction").note)
     with pytest.raises(ValueError, match="not both"):
         GuideWayFriction(PADS, LuGreParameters.named("canudas1995"), law=friction.law)
 

@@ -19,8 +19,8 @@ from numpy.testing import assert_allclose
 from servotune.axis import Axis, Cutting, TuningSettings
 from servotune.chatter.setup import MillingSetup
 from servotune.drive import Drive, Motor, NotchFilter, PIController, Sampling
+from servotune.friction.guideway import GuideWayFriction
 from servotune.friction.lugre import BIANCHI2014
-from servotune.plant import GuideWayFriction
 from servotune.structure.builder import StructureBuilder
 from servotune.structure.model import ModalModel
 from servotune.tuning.problem import Design

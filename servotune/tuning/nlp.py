@@ -20,9 +20,11 @@ parameters (one column per frequency and regime model; see :mod:`servotune.tunin
                 Kv >= Kv_min,  bounds on every u_v
 
 The rows after the epigraph rows are the registered requirements' (one module each in
-:mod:`servotune.tuning.requirements`, see :mod:`servotune.tuning.constraint`): their loop rows at
-every loop frequency and their rows in the design variables; the statement above is that of the
-shipped ones. h_m is the work-piece compliance, L_v and L_p the velocity loop (position loop open) and the
+:mod:`servotune.tuning.requirements`, see :mod:`servotune.tuning.constraint`): their loop rows
+at every loop frequency and their rows in the design variables; the statement above is that of
+the shipped ones.
+
+h_m is the work-piece compliance, L_v and L_p the velocity loop (position loop open) and the
 position loop (velocity loop closed), T = L/(1 + L), all with the guide ways of model m and the
 digital drive's delays. The conditions "for w <= ..." depend on the design; they are imposed at
 every grid frequency with a smooth gate: ``value + sigma(kappa log(w / w_edge)) >= 0`` with the
