@@ -341,7 +341,7 @@ def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None,
                                     velocity_outputs=pads + motor, name="structure")
     blocks = [mech] + [contact.pad_block(p, len(pads)) for p in pads]
     if drive is not None:
-        blocks += drive_blocks(drive) + _motor_port(drive)
+        blocks += drive_blocks(drive) + motor_port(drive)
     return blocks, wp
 
 
@@ -386,7 +386,7 @@ def build_plant(structure: ModalModel, drive: Drive | None = None, contact: Cont
     return connect(blocks, plant_inputs, plant_outputs, name=name)
 
 
-def _motor_port(drive: Drive) -> list[control.StateSpace]:
+def motor_port(drive: Drive) -> list[control.StateSpace]:
     """Torque onto the rotor/stator DOFs; encoder signals from them."""
     rotor, stator = drive.motor.rotor, drive.motor.stator
     grounded = stator is None

@@ -257,3 +257,21 @@ def test_kernels_of_older_sources_are_removed_after_a_day(toy_law, tmp_path):
     assert not old.exists() and not cached.exists()
     assert recent.exists()                      # younger: maybe in use by a running process
     assert len(list(folder.glob("_kernel_toymaxwell_toy_remainder_*.py"))) == 2
+
+
+def test_the_lugre_law_gives_harmonic_balance_the_exact_jacobian_of_its_periodic_force():
+    # reference: central differences of the law's own periodic force
+    from servotune.friction.laws.lugre import LuGreFriction
+
+    law = LuGreFriction(LuGreParameters.named("bianchi2014"))
+    t = np.arange(64) / 64.0
+    v = 0.02 * np.sin(2 * np.pi * t) + 0.005
+    force, jac = law.periodic_force_jacobian(v, 0.02, share=0.25)
+    np.testing.assert_allclose(force, law.periodic_force(v, 0.02, share=0.25), rtol=1e-12)
+    h = 1e-9
+    for j in (0, 17, 40):
+        e = np.zeros_like(v)
+        e[j] = h
+        fd = (law.periodic_force(v + e, 0.02, 0.25)
+              - law.periodic_force(v - e, 0.02, 0.25)) / (2 * h)
+        np.testing.assert_allclose(jac[:, j], fd, rtol=1e-4, atol=1e-6 * np.abs(fd).max())

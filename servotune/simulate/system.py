@@ -27,7 +27,7 @@ import numpy as np
 import scipy.linalg
 
 from ..drive import Drive, drive_blocks
-from ..plant import WP_DOFS, _motor_port
+from ..plant import WP_DOFS, motor_port
 from ..structure.model import ModalModel, signal_name
 from .contact import PadFriction
 
@@ -165,7 +165,7 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
                                     velocity_outputs=ports, name="structure")
     blocks = [mech] + [friction.pad_block(p, len(pads), speed) for p in pads]
     if drive is not None:
-        blocks += drive_blocks(drive) + _motor_port(drive)
+        blocks += drive_blocks(drive) + motor_port(drive)
     available = (["x_ref", "v_ref", "a_ref"] if drive is not None else []) + [
         signal_name(d, "f_") for d in wp] + (["t_dist"] if drive is not None else []) + (
         ["one"] if nonlinear else [])

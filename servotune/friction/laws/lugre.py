@@ -497,6 +497,33 @@ class LuGreFriction(FrictionLaw):
 
         return lugre_periodic_force(self.params.scaled(share), velocity, period)
 
+    def periodic_force_jacobian(self, velocity, period: float, share: float = 1.0):
+        """Return :meth:`periodic_force` and its exact derivative by the velocity samples.
+
+        Harmonic balance uses it for its Newton steps (without it, it differentiates
+        :meth:`periodic_force` numerically).
+
+        Parameters
+        ----------
+        velocity : array_like
+            Pad velocity [m/s] at N equally spaced instants of one period (periodic).
+        period : float
+            The period [s], > 0.
+        share : float
+            The pad's share of the axis-total law (``1 / n_pads``), > 0.
+
+        Returns
+        -------
+        force : numpy.ndarray
+            The force [N] at the same instants.
+        jacobian : numpy.ndarray
+            (N, N) derivative of the force by the velocity samples [N s/m]
+            (:func:`servotune.friction.periodic.lugre_periodic_jacobian`).
+        """
+        from ..periodic import lugre_periodic_jacobian
+
+        return lugre_periodic_jacobian(self.params.scaled(share), velocity, period)
+
     def friction_force(self, v, z):
         """Return the friction force [N], axis total: :func:`servotune.friction.lugre_force`.
 
