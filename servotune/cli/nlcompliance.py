@@ -4,7 +4,8 @@ Multi-harmonic balance of the closed-loop axis with LuGre friction at the guide-
 (:func:`servotune.harmonic.nonlinear_compliance`): per work-piece force level the compliance
 curve over the band, its peak and resonance and the pad amplitude at the peak, at rest or
 feeding at ``--speed``; a figure of the curves over the linear presliding, viscous-only and
-sliding models and the describing-function prediction (the paper's remarks A-C in one plot).
+(when feeding) sliding models and the describing-function prediction (the paper's remarks A-C
+in one plot).
 """
 
 from __future__ import annotations
@@ -77,6 +78,20 @@ def run(args) -> int:
     int
         The exit status: 0. Errors are raised, and reported by
         :func:`servotune.cli.main` with status 1.
+
+    Raises
+    ------
+    CliError
+        If the band is not ``--f-start-hz < --f-end-hz``, or the closed loop linearised in the
+        regime is unstable (:func:`servotune.harmonic.compliance.require_stable_regime`).
+
+    Notes
+    -----
+    Writes ``results.json``
+    (:meth:`servotune.harmonic.compliance.NonlinearCompliance.to_dict` with the axis' notes,
+    ``continuous_drive``, ``folder`` and ``figures``) and, unless ``--no-plots``,
+    ``nlcompliance.png``; prints the JSON with ``--json``, else a table of the peaks per force
+    level.
     """
     from .. import progress
     from ..units import HZ_PER_RAD_S, RAD_S_PER_HZ

@@ -50,9 +50,11 @@ def periodic_friction_force(law, velocity, period: float, share: float = 1.0) ->
         Pad sliding velocity [m/s] at N equally spaced instants over one period (a row per
         pad; a law's ``periodic_force`` is asked row by row).
     period : float
-        The period [s].
+        The period T [s] (2 pi / w).
     share : float
-        The pad's share of the axis-total law (1/n for n equal pads).
+        The pad's share of the axis-total law, dimensionless (1/n for n equal pads): a LuGre
+        law is scaled by it (:meth:`~servotune.friction.lugre.LuGreParameters.scaled`), a
+        viscous coefficient multiplied, and a law with ``periodic_force`` receives it.
 
     Returns
     -------
@@ -62,7 +64,9 @@ def periodic_friction_force(law, velocity, period: float, share: float = 1.0) ->
     Raises
     ------
     TypeError
-        If the law offers neither ``periodic_force`` nor is a known law.
+        If the law has no ``periodic_force`` method, is not a LuGre law (a
+        :class:`LuGreParameters` or an object whose ``params`` is one) and is not linear
+        viscous damping (an attribute ``c`` and ``nonlinear`` false).
 
     See Also
     --------
@@ -101,15 +105,16 @@ def periodic_friction_jacobian(law, velocity, period: float, share: float = 1.0,
     Parameters
     ----------
     law, velocity, period, share
-        As :func:`periodic_friction_force`.
+        As :func:`periodic_friction_force` (velocity [m/s], shape (N,) or (n, N); period [s]).
     basis : array_like, shape (N, m), optional
-        Velocity directions along which the derivative is wanted (default: every sample).
+        Velocity directions along which the derivative is wanted [m/s per unit of the m
+        coordinates] (default: every sample, the identity).
 
     Returns
     -------
     tuple of numpy.ndarray or None
-        ``(force (N,), dforce_dvelocity @ basis (N, m))`` (with a leading pad axis for 2-D
-        velocities): from the law's
+        ``(force [N] (N,), dforce_dvelocity @ basis [N s/m] (N, m))`` (with a leading pad axis
+        for 2-D velocities): from the law's
         ``periodic_force_jacobian(velocity, period, share=1.0)`` (times the basis) when it has
         one, from
         :func:`~servotune.friction.periodic.lugre_periodic_jacobian` for a LuGre law that
@@ -160,11 +165,17 @@ def samples_from_harmonics(coefficients, samples: int, mean=0.0) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (..., N)
+        ``x(t_i)``, i = 0..N-1, in the unit of the coefficients.
 
     Raises
     ------
     ValueError
         If N is not above 2 H.
+
+    Notes
+    -----
+    An inverse real FFT of the one-sided spectrum ``N mean`` (bin 0) and ``N X_k / 2`` (bin k),
+    the synthesis step of AFT (Krack and Gross 2019, sec 3.5).
 
     See Also
     --------
@@ -188,12 +199,16 @@ def harmonics_from_samples(values, harmonics: int) -> tuple[np.ndarray, np.ndarr
     values : array_like, shape (..., N)
         Samples at N equally spaced instants of one period.
     harmonics : int
-        H.
+        H, below N / 2 (not checked: at H = N / 2 the last coefficient, the Nyquist bin, comes
+        back doubled, and above it fewer than H coefficients come back).
 
     Returns
     -------
     mean : numpy.ndarray, shape (...)
+        ``x_0``, the average of the samples, in their unit.
     coefficients : numpy.ndarray, complex, shape (..., H)
+        ``X_1 .. X_H``, twice the real FFT bins 1..H divided by N (the analysis step of AFT,
+        Krack and Gross 2019, sec 3.5).
 
     See Also
     --------

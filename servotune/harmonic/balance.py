@@ -70,10 +70,17 @@ class HarmonicSettings:
         N, the instants per period of AFT (default: the power of 2 at least 12 H and 32, 128 for
         H = 9, so that the friction force's higher harmonics alias little onto the kept ones).
     tolerance : float
-        Newton stops when the residual of (1) is below ``tolerance`` times the size of the
-        pad response (relative).
+        Newton stops when the norm of the residual of (1) is at most ``tolerance`` times the
+        norm of the pad response (relative, in (0, 0.01); the continuation's corrector uses
+        the same test).
     max_iterations : int
-        Newton iterations per solve.
+        Newton iterations per fixed-frequency solve (:meth:`PadBalance.solve`), at least 1.
+
+    Raises
+    ------
+    ValueError
+        If ``harmonics`` is not a whole number >= 1, ``samples`` not a whole number > 2 H,
+        ``tolerance`` not in (0, 0.01) or ``max_iterations`` below 1.
     """
 
     harmonics: int = 9
@@ -103,7 +110,7 @@ class PadBalance:
     Parameters
     ----------
     receptance : PadReceptance
-        The linear part.
+        The linear part, G of (1) and (2) (:func:`~servotune.harmonic.linear.pad_receptance`).
     law : object
         The friction law (axis totals, shared equally by the pads), reached through
         :func:`~servotune.harmonic.aft.periodic_friction_force`.
@@ -111,12 +118,16 @@ class PadBalance:
         F_a [N], half the peak-to-peak work-piece force.
     speed : float
         Mean pad sliding speed V [m/s] (0 at rest).
-    settings : HarmonicSettings
-        Harmonics, AFT samples and tolerances.
+    settings : HarmonicSettings, optional
+        Harmonics, AFT samples and tolerances (default ``HarmonicSettings()``).
 
     Notes
     -----
-    The unknown vector ``y`` holds, pad by pad, ``Re X_1..Re X_H, Im X_1..Im X_H`` [m].
+    The unknown vector ``y`` holds, pad by pad, ``Re X_1..Re X_H, Im X_1..Im X_H`` [m]
+    (n x 2H real numbers). The residual is ``R(y, w) = y - [G_pF F_a delta_k1 - G_pp Fr(y)]``,
+    equation (1) in real form, and its Jacobian ``I + G_pp dFr/dy`` with ``dFr/dy``
+    block-diagonal over the pads (Krack and Gross 2019, ch 2-4, with the condensation to the
+    nonlinear DOFs of sec 3.4 and AFT of sec 3.5).
     """
 
     def __init__(self, receptance: PadReceptance, law, force_amplitude: float,
@@ -158,7 +169,7 @@ class PadBalance:
         Parameters
         ----------
         y : array_like, shape (n 2H,)
-            Real unknowns.
+            Real unknowns [m], pad by pad ``Re X_1..Re X_H, Im X_1..Im X_H``.
 
         Returns
         -------
@@ -179,6 +190,8 @@ class PadBalance:
         Returns
         -------
         numpy.ndarray, shape (n 2H,)
+            Pad by pad ``Re X_1..Re X_H, Im X_1..Im X_H`` [m] (the inverse of
+            :meth:`complex_of`).
         """
         return np.stack([x.real, x.imag], axis=1).reshape(-1)
 
@@ -195,7 +208,8 @@ class PadBalance:
         Returns
         -------
         numpy.ndarray, complex, shape (n, H)
-            Friction force harmonics [N] (along positive pad velocity).
+            Friction force harmonics Fr_p,k [N] (along positive pad velocity), from the pad
+            velocities ``V + sum_k Re(j k w X_k e^{j k w t})`` at the N AFT instants.
         """
         period = 2.0 * math.pi / omega
         v = samples_from_harmonics(1j * omega * self._k * x, self.samples, self.speed)
@@ -229,8 +243,9 @@ class PadBalance:
             Pad displacement harmonics [m] whose friction acts.
         omega : float
             Angular frequency [rad/s].
-        friction : numpy.ndarray, optional
-            Their friction harmonics, when already known.
+        friction : numpy.ndarray, complex, shape (n, H), optional
+            Their friction harmonics [N], when already known (default: computed by
+            :meth:`friction_harmonics`).
 
         Returns
         -------
@@ -247,7 +262,7 @@ class PadBalance:
 
         Parameters
         ----------
-        y : array_like
+        y : array_like, shape (n 2H,)
             Real unknowns [m].
         omega : float
             Angular frequency [rad/s].
@@ -255,7 +270,7 @@ class PadBalance:
         Returns
         -------
         numpy.ndarray, shape (n 2H,)
-            [m].
+            ``y`` minus the pad harmonics that (1) gives for its friction, in real form [m].
         """
         x = self.complex_of(y)
         return np.asarray(y, dtype=float) - self.real_of(self.response(x, omega)[:self.n_pads])
@@ -294,19 +309,24 @@ class PadBalance:
 
         Parameters
         ----------
-        y : array_like
-            Real unknowns.
+        y : array_like, shape (m,)
+            Real unknowns [m], m = n 2H.
         omega : float
             Angular frequency [rad/s].
         with_omega : bool
-            Also the derivative of the residual with respect to omega (finite difference).
+            Also the derivative of the residual with respect to omega
+            (:meth:`omega_derivative`, a forward difference).
 
         Returns
         -------
         residual : numpy.ndarray, shape (m,)
+            R(y, w) [m], as :meth:`residual`.
         jac_y : numpy.ndarray, shape (m, m)
+            dR/dy, ``I + G_pp dFr/dy`` (dimensionless): the friction derivative is the law's
+            exact one (:func:`~servotune.harmonic.aft.periodic_friction_jacobian`) where it
+            has one, else forward differences with all pads perturbed at once.
         jac_omega : numpy.ndarray, shape (m,)
-            Only when ``with_omega``.
+            dR/dw [m s/rad]; only when ``with_omega``.
         """
         y = np.asarray(y, dtype=float)
         x = self.complex_of(y)
@@ -332,17 +352,17 @@ class PadBalance:
 
         Parameters
         ----------
-        y : array_like
+        y : array_like, shape (n 2H,)
             Real unknowns [m].
         omega : float
             Angular frequency [rad/s].
-        r : numpy.ndarray, optional
+        r : numpy.ndarray, shape (n 2H,), optional
             The residual at ``(y, omega)`` when already known.
 
         Returns
         -------
-        numpy.ndarray
-            dR/domega [m s/rad].
+        numpy.ndarray, shape (n 2H,)
+            dR/domega [m s/rad], ``(R(y, w + dw) - R(y, w)) / dw`` with ``dw = 1e-7 w``.
         """
         r = self.residual(y, omega) if r is None else r
         d = 1e-7 * omega
@@ -361,6 +381,8 @@ class PadBalance:
         Returns
         -------
         bool
+            True when ``|r| <= tolerance |y|`` (Euclidean norms; ``tolerance`` of the
+            settings).
         """
         size = max(float(np.linalg.norm(y)), 1e-300)
         return float(np.linalg.norm(r)) <= self.settings.tolerance * size
@@ -372,19 +394,27 @@ class PadBalance:
         ----------
         omega : float
             Angular frequency [rad/s].
-        y0 : array_like, optional
-            Start (default: no pad motion; the first step is then the linearisation about it).
+        y0 : array_like, shape (n 2H,), optional
+            Start [m] (default: no pad motion; the first step is then the linearisation about
+            it).
 
         Returns
         -------
-        y : numpy.ndarray
-            The solution.
+        y : numpy.ndarray, shape (n 2H,)
+            The solution [m].
         iterations : int
+            Newton iterations taken (at least 1: the start is always corrected once).
 
         Raises
         ------
         ConvergenceError
             If Newton's method does not converge within ``max_iterations``.
+
+        Notes
+        -----
+        Each Newton step is damped: the full step is taken when the residual norm falls,
+        otherwise it is halved until it does, down to a factor of 1/1024, which is then taken
+        whether or not the residual fell.
         """
         y = np.zeros(self.size) if y0 is None else np.array(y0, dtype=float)
         for it in range(1, self.settings.max_iterations + 1):
@@ -410,8 +440,8 @@ class PadBalance:
 
         Parameters
         ----------
-        y : array_like
-            Real unknowns [m].
+        y : array_like, shape (n 2H,)
+            Real unknowns [m], a solution of (1).
         omega : float
             Angular frequency [rad/s].
 

@@ -8,9 +8,10 @@ compliance is the fundamental of the work-piece displacement per force amplitude
 paper's Table 3 (and :meth:`servotune.simulate.SimulationResult.sweep_envelope`) measure it.
 
 Beside it, the linear predictions that bracket it (the paper's remarks A-C in one picture):
-the presliding contact (pads locked by the bristle spring sigma0 and damper sigma1), the
-viscous-only pads ("vd"), the LuGre linearisation about steady sliding at the feed speed, and
-the describing-function prediction (the same balance with the fundamental only, H = 1).
+the presliding contact (pads locked by the bristle spring sigma0 and the dampers sigma1 and
+sigma2), the viscous-only pads (the paper's "vd"), the LuGre linearisation about steady sliding
+at the feed speed (when feeding), and the describing-function prediction (the same balance with
+the fundamental only, H = 1).
 
 References
 ----------
@@ -44,10 +45,11 @@ DEFAULT_BAND = (2.0 * math.pi * 10.0, 2.0 * math.pi * 100.0)   # the paper's swe
 
 
 def curve_peak(omega, compliance) -> tuple[float, float, int]:
-    """Peak of a sampled curve: (omega at the peak [rad/s], peak, index of the largest sample).
+    """Return the peak of a sampled curve: its frequency, its value and the largest sample.
 
     A parabola through the largest sample and its two neighbours places the peak between
-    them (when they bracket it).
+    them, when the three frequencies increase, the parabola opens downwards and its vertex
+    lies between the neighbours; otherwise the largest sample is the peak.
 
     Parameters
     ----------
@@ -58,7 +60,12 @@ def curve_peak(omega, compliance) -> tuple[float, float, int]:
 
     Returns
     -------
-    tuple of (float, float, int)
+    omega_peak : float
+        Frequency of the peak [rad/s].
+    peak : float
+        The peak [m/N] (the parabola's vertex value, or the largest sample).
+    index : int
+        Index of the largest sample.
     """
     w = np.asarray(omega, dtype=float)
     c = np.asarray(compliance, dtype=float)
@@ -87,13 +94,15 @@ class ComplianceCurve:
     pad_amplitude : numpy.ndarray
         Half the peak-to-peak pad displacement (largest pad, all harmonics) [m].
     resonance : float
-        Frequency of the compliance peak [rad/s].
+        Frequency of the compliance peak [rad/s] (:func:`curve_peak`).
     peak : float
-        The compliance peak [m/N].
+        The compliance peak [m/N] (:func:`curve_peak`).
     pad_amplitude_at_peak : float
-        Pad amplitude at the peak [m].
+        Pad amplitude at the largest point of the curve [m].
     harmonics : int
+        H, the harmonics of the balance.
     newton_iterations : int
+        Newton iterations of the continuation and the peak refinement.
     wall_time : float
         Seconds spent on the curve.
     """
@@ -115,6 +124,10 @@ class ComplianceCurve:
         Returns
         -------
         dict
+            The scalars (``force_pp_n``, ``resonance_hz``, ``peak_compliance_m_per_n``,
+            ``pad_amplitude_at_peak_m``, ``harmonics``, ``points``, ``newton_iterations``,
+            ``wall_time_s``) and the lists ``frequency_hz``, ``compliance_m_per_n`` and
+            ``pad_amplitude_m``.
         """
         return {"force_pp_n": self.force_pp, "resonance_hz": self.resonance * HZ_PER_RAD_S,
                 "peak_compliance_m_per_n": self.peak,
@@ -137,10 +150,17 @@ class NonlinearCompliance:
     curves : tuple of ComplianceCurve
         Multi-harmonic balance, one per force level.
     describing : tuple of ComplianceCurve
-        The describing-function prediction (H = 1), one per force level.
+        The describing-function prediction (H = 1), one per force level (empty when not
+        asked for).
     references : dict
-        ``{name: (omega [rad/s], compliance [m/N])}`` of the linear models.
+        ``{name: (omega [rad/s], compliance [m/N])}`` of the linear models: ``"presliding"``,
+        ``"viscous"`` and, when feeding, ``"sliding"`` (empty when not asked for).
     settings : HarmonicSettings
+        Harmonics, AFT samples and tolerance of ``curves``.
+    axis : str
+        The axis' name.
+    notes : tuple of str
+        Remarks for the reports (none from :func:`nonlinear_compliance` itself).
     """
 
     speed: float
@@ -167,6 +187,9 @@ class NonlinearCompliance:
         Returns
         -------
         dict
+            ``axis``, ``speed_m_per_s``, the settings (``harmonics``, ``aft_samples``,
+            ``tolerance``), ``curves`` (:meth:`ComplianceCurve.to_dict`), the peaks of
+            ``describing_function`` and ``linear_references``, and ``notes``.
         """
         return {
             "axis": self.axis, "speed_m_per_s": self.speed,
@@ -187,6 +210,7 @@ class NonlinearCompliance:
         Returns
         -------
         matplotlib.figure.Figure
+            The figure of :func:`~servotune.harmonic.plot.nonlinear_compliance_plot`.
         """
         from .plot import nonlinear_compliance_plot
 
@@ -206,9 +230,13 @@ def _compliance(balance: PadBalance, omega, y) -> float:
 
 
 def refine_peak(balance: PadBalance, branch: Branch, rounds: int = 3) -> Branch:
-    """The branch with up to ``rounds`` more points at the parabola vertex of the compliance
-    around its largest point (fixed-frequency solves started from the neighbours), so that the
-    peak is resolved finer than the continuation steps.
+    """Return the branch with more points at the compliance peak.
+
+    Each round adds a point at the vertex of the parabola through the compliance's largest
+    point and its neighbours (:func:`curve_peak`), solved at that fixed frequency from the
+    linear interpolation of the two points around it, so that the peak is resolved finer than
+    the continuation steps. The rounds stop early when the largest point is at an end of the
+    branch or the vertex lies within 1e-5 of its frequency (relative).
 
     Parameters
     ----------
@@ -217,11 +245,18 @@ def refine_peak(balance: PadBalance, branch: Branch, rounds: int = 3) -> Branch:
     branch : Branch
         The continued branch.
     rounds : int
-        Most points added.
+        Most points added (default 3).
 
     Returns
     -------
     Branch
+        The branch with the points inserted in frequency order; ``iterations`` counts their
+        Newton iterations too.
+
+    Raises
+    ------
+    ConvergenceError
+        If a fixed-frequency solve does not converge.
     """
     w, ys = list(branch.omega), list(branch.y)
     comp = [_compliance(balance, a, b) for a, b in zip(w, ys, strict=True)]
@@ -258,8 +293,11 @@ def _curve(balance: PadBalance, band, continuation, y0=None) -> ComplianceCurve:
 
 
 def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
-    """Start of the balance at rest: the pads on the presliding contact (spring sigma0,
-    damper sigma1 + sigma2, shared by the pads), fundamental only.
+    """Return a start of the balance at rest: the pads on the linear presliding contact.
+
+    The friction of each pad is taken as the linear impedance
+    ``z = (sigma0 + j w (sigma1 + sigma2)) / n`` (the axis totals shared by the n pads), so that
+    (1) with the fundamental only becomes ``(I + G_pp(j w) z) X_1 = G_pF(j w) F_a``.
 
     Parameters
     ----------
@@ -268,12 +306,12 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
     omega : float
         Angular frequency [rad/s].
     params : LuGreParameters
-        Axis-total friction.
+        Axis-total friction (sigma0 [N/m], sigma1 and sigma2 [N s/m]).
 
     Returns
     -------
-    numpy.ndarray
-        The real unknowns of ``balance``.
+    numpy.ndarray, shape (n 2H,)
+        The real unknowns of ``balance`` [m]: X_1 of each pad, the higher harmonics zero.
     """
     n = balance.n_pads
     g = balance.receptance(np.array([omega]))[:, :, 0]
@@ -285,21 +323,24 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
 
 
 def require_stable_regime(setup, speed: float = 0.0) -> None:
-    """Refuse an axis whose linearised closed loop is unstable in the regime (harmonic balance
-    would return periodic solutions nobody can observe).
+    """Refuse an axis whose linearised closed loop is unstable in the regime.
+
+    Harmonic balance would return periodic solutions about an unstable state, which nobody can
+    observe.
 
     Parameters
     ----------
     setup : servotune.simulate.setup.AxisSetup
         Structure, drive, pads and friction of the axis.
     speed : float
-        Feed speed [m/s]: 0 checks the presliding contact (at rest), > 0 the LuGre
-        linearisation about sliding at that speed.
+        Feed speed [m/s]: > 0 checks the LuGre linearisation about sliding at that speed,
+        otherwise the presliding contact (at rest).
 
     Raises
     ------
     servotune.plant.UnstableLoopError
-        (a ValueError) naming the unstable poles.
+        (a ValueError) If the closed loop has a pole in the right half-plane; the message
+        names the unstable poles.
     """
     from ..frequency import require_stable
     from ..plant import build_plant
@@ -324,16 +365,17 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     Parameters
     ----------
     setup : servotune.simulate.setup.AxisSetup
-        Structure, drive, pads and friction of the axis (:func:`~servotune.simulate.setup.
-        axis_setup`).
+        Structure, drive, pads and friction of the axis
+        (:func:`~servotune.simulate.setup.axis_setup`).
     forces_pp : sequence of float
         Work-piece force levels, peak to peak [N].
     speed : float
         Feed speed [m/s] (0: at rest; the pads slide on average at this speed).
     band : (float, float)
-        Frequency band [rad/s] (default 10-100 Hz, the paper's sweep).
+        Frequency band [rad/s], ``0 < start < end`` (default 10-100 Hz, the paper's sweep).
     settings : HarmonicSettings, optional
-        Harmonics, AFT samples, tolerance (default 9 harmonics, 128 samples).
+        Harmonics, AFT samples, tolerance (default 9 harmonics, 128 samples); the
+        describing-function curves take H = 1 with the default samples for it (32).
     continuation : ContinuationSettings, optional
         Step control of the continuation.
     law : object, optional
@@ -342,22 +384,35 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
         of ``setup`` themselves, evaluated by
         :func:`~servotune.friction.periodic.lugre_periodic_force` with its exact Jacobian.
     references : bool
-        Also the linear references (presliding, viscous-only, sliding at ``speed``).
+        Also the linear references (presliding, viscous-only and, when ``speed > 0``, sliding
+        at ``speed``), by :func:`servotune.frequency.port_compliance` on 901 frequencies.
     describing : bool
         Also the describing-function curves (H = 1).
     progress : callable, optional
-        Called with the number of curves done.
+        Called with the number of force levels done (after each level's curves).
 
     Returns
     -------
     NonlinearCompliance
+        One curve per force level (and its describing-function curve), the linear references,
+        the settings and the axis' name.
 
     Raises
     ------
     ValueError
-        If a force level or the speed is not valid.
+        If a force level is not finite and > 0, the speed is not finite and >= 0, the band is
+        not ``0 < start < end``, or the structure's damping is not modal
+        (:func:`~servotune.harmonic.linear.pad_receptance`).
     ConvergenceError
         If a branch cannot be followed.
+
+    Notes
+    -----
+    The work-piece force is ``F(t) = F_pp/2 cos(w t)``; the compliance at w is
+    ``|X_wp,1| / (F_pp / 2)``, the fundamental of the work-piece displacement by equation (2)
+    of :mod:`servotune.harmonic.balance`. Each curve is continued from ``band[0]`` (at rest
+    started from :func:`presliding_guess`) and its peak refined (:func:`refine_peak`). The
+    stability of the regime is not checked here (:func:`require_stable_regime` does).
 
     See Also
     --------

@@ -40,20 +40,27 @@ class ContinuationSettings:
     Parameters
     ----------
     step_max : float
-        Largest frequency step [rad/s] (default 2 pi x 5 Hz).
+        Largest frequency step [rad/s] (default 2 pi x 5 Hz); the first step moves the
+        frequency by at most a quarter of it.
     step_min : float
-        Smallest arc-length step, as a frequency [rad/s]; below it the continuation stops with
-        an error.
+        Smallest arc-length step, as a frequency [rad/s] (default 2 pi x 1e-4 Hz): a step
+        halved below it stops the continuation with an error.
     arc_max : float
         Largest step along the arc in the scaled variables (the response relative to the
-        largest met so far, the frequency relative to the band).
+        largest met so far, the frequency relative to the band), dimensionless (default 0.5).
     max_angle : float
         Largest turn of the tangent per step [rad] (default 0.5, about 29 degrees; the peak is
-        refined afterwards by :func:`servotune.harmonic.compliance.refine_peak`).
+        refined afterwards by :func:`servotune.harmonic.compliance.refine_peak`); not
+        enforced on a step already at ``step_min``.
     fast : int
-        A corrector of at most this many iterations lets the step grow.
+        A corrector of at most this many iterations lets the step grow by 1.5 (default 3).
     max_iterations : int
-        Corrector iterations before the step is halved.
+        Corrector iterations before the step is halved (default 8).
+
+    Raises
+    ------
+    ValueError
+        If not ``0 < step_min < step_max``, or ``max_angle`` is not in (0, pi/2).
     """
 
     step_max: float = 2.0 * math.pi * 5.0
@@ -81,9 +88,11 @@ class Branch:
     y : numpy.ndarray, shape (K, m)
         The harmonic balance unknowns of :class:`PadBalance` at the points.
     iterations : int
-        Newton iterations in all (correctors and the first solve).
+        Newton iterations in all (the correctors, and the fixed-frequency solves at the
+        band's start and end).
     rejected : int
-        Steps taken again with a smaller step.
+        Steps taken again with a smaller step (the corrector failed, left positive
+        frequencies, or the tangent turned too far).
     """
 
     omega: np.ndarray
@@ -116,21 +125,24 @@ def continue_in_frequency(balance: PadBalance, omega_start: float, omega_end: fl
     omega_start, omega_end : float
         The band [rad/s], ``0 < omega_start < omega_end``.
     settings : ContinuationSettings, optional
-        Step control.
-    y0 : array_like, optional
-        Start guess at ``omega_start`` (default: none, see :meth:`PadBalance.solve`).
+        Step control (default ``ContinuationSettings()``).
+    y0 : array_like, shape (n 2H,), optional
+        Start guess at ``omega_start`` [m] (default: none, see :meth:`PadBalance.solve`).
 
     Returns
     -------
     Branch
-        Its last point is at ``omega_end``.
+        The points from ``omega_start`` on; its last point is at ``omega_end`` (a
+        fixed-frequency solve started from the interpolation of the two points around it).
 
     Raises
     ------
     ConvergenceError
-        If the step falls below ``step_min`` (the branch cannot be followed).
+        If the solve at ``omega_start`` or ``omega_end`` does not converge, the step falls
+        below ``step_min`` (the branch cannot be followed), or the branch turns back below
+        ``omega_start - step_max``.
     ValueError
-        If the band is empty.
+        If not ``0 < omega_start < omega_end``.
     """
     cs = settings or ContinuationSettings()
     if not (0.0 < omega_start < omega_end):

@@ -61,6 +61,11 @@ class PadReceptance:
         Work-piece DOF of the force (input n) and of the displacement (output n).
     drive : Drive or None
         The cascade closed through the motor port (None: the structure alone).
+
+    Notes
+    -----
+    Made by :func:`pad_receptance`; calling it with angular frequencies [rad/s] returns
+    ``G[o, i, k]`` [m/N], shape (n + 1, n + 1, K). ``n_pads`` is the number of pads n.
     """
 
     pads: tuple
@@ -100,6 +105,7 @@ class PadReceptance:
         Parameters
         ----------
         omega : array_like, shape (K,)
+            Angular frequencies [rad/s], finite and > 0 (a scalar counts as K = 1).
 
         Returns
         -------
@@ -193,18 +199,23 @@ def pad_receptance(structure: ModalModel, drive: Drive | None, pads, force_dof: 
     pads : sequence of str
         The pad DOFs (relative X at the guide-way pads).
     force_dof : str
-        Work-piece DOF where the harmonic force acts.
+        Work-piece DOF where the harmonic force acts (default ``"wp.x"``).
     output_dof : str, optional
         Work-piece DOF whose displacement is the compliance (default ``force_dof``).
 
     Returns
     -------
     PadReceptance
+        G(j w) between the n pad forces and the work-piece force (inputs) and the n pad
+        displacements and the work-piece displacement (outputs), [m/N].
 
     Raises
     ------
     ValueError
-        If a DOF is not in the structure, or there is no pad, or the damping is not modal.
+        If there is no pad, or the structure's damping couples its modes (``phi^T C phi`` not
+        diagonal: harmonic balance here needs modal damping).
+    servotune.structure.model.UnknownDofError
+        (a ValueError and a KeyError) If a DOF is not in the structure.
 
     See Also
     --------

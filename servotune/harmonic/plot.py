@@ -17,17 +17,22 @@ _STYLES = {"presliding": ("k", "--", "linear: presliding (pads locked)"),
 
 
 def nonlinear_compliance_plot(result):
-    """Compliance [m/N] over frequency [Hz]: harmonic balance per force (solid), describing
-    function (thin dashed, same colour), linear references (black/grey/green).
+    """Plot the compliance [m/N] over frequency [Hz] of a harmonic-balance result.
+
+    The harmonic balance per force level (solid, its peak marked by a dot), the
+    describing-function curve of the same level (thin dashed, same colour) and the linear
+    references (presliding black dashed, viscous-only grey dotted, sliding green dash-dotted),
+    on a logarithmic compliance axis.
 
     Parameters
     ----------
     result : NonlinearCompliance
-        The curves and references.
+        The curves and references (:func:`~servotune.harmonic.compliance.nonlinear_compliance`).
 
     Returns
     -------
     matplotlib.figure.Figure
+        The figure (one axes); closing it is the caller's.
     """
     import matplotlib.pyplot as plt
 

@@ -23,7 +23,7 @@ __all__ = ["SteppedSine", "stepped_sine"]
 
 START = 0.2      # [s] smooth start to the feed speed
 SETTLE = 0.3     # [s] before the force starts while feeding
-STEP = 5e-4      # [s] the simulation's record step; durations are whole multiples of it
+STEP = 5e-4      # [s] run durations are whole multiples of it (recorded at STEP / 2)
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,7 +37,9 @@ class SteppedSine:
     compliance : numpy.ndarray
         Fundamental work-piece displacement per force amplitude [m/N].
     durations : numpy.ndarray
-        Simulated time [s] that reached the steady state at each frequency.
+        Simulated time after the force starts [s] of the run that reached the steady state at
+        each frequency (while feeding, the run is 0.3 s longer: the force starts once the
+        feed is steady).
     wall_time : float
         Seconds spent.
     """
@@ -90,29 +92,39 @@ def stepped_sine(setup, force_pp: float, omega, speed: float = 0.0, tolerance: f
         Structure, drive, pads and friction of the axis.
     force_pp : float
         Work-piece force, peak to peak [N].
-    omega : array_like
-        Frequencies [rad/s].
+    omega : array_like, shape (K,)
+        Frequencies [rad/s], > 0.
     speed : float
-        Feed speed [m/s] (0 at rest).
+        Feed speed [m/s] (0 at rest; otherwise reached by a smooth start in 0.2 s, and the
+        force starts at 0.3 s).
     tolerance : float
-        Relative change of the fundamental between the last two windows that counts as steady.
+        Relative change of the fundamental between the last two windows that counts as steady
+        (``|last - before| <= tolerance last``).
     law : PadFriction, optional
-        The friction law (default LuGre of ``setup``).
+        The friction law of every pad (default
+        :class:`~servotune.simulate.LuGreFriction` with the LuGre parameters of ``setup``).
     window_cycles : int
-        Cycles per window.
+        Cycles of the force per window.
     first : float
-        First simulated time after the force starts [s]; doubled until steady.
+        Shortest first run [s], simulated time after the force starts; the first run is
+        ``max(first, 3 windows)``, doubled until steady.
     longest : float
-        Longest simulated time [s] before giving up.
+        Longest simulated time after the force starts [s]: a run that would have to be
+        doubled beyond it gives up.
 
     Returns
     -------
     SteppedSine
+        The compliance ``|X_wp,1| / (F_pp / 2)`` [m/N] and the durations at each frequency.
 
     Raises
     ------
     RuntimeError
         If a frequency does not reach its steady state within ``longest`` seconds.
+
+    See Also
+    --------
+    servotune.harmonic.compliance.nonlinear_compliance : the harmonic balance it checks.
     """
     t_start = time.perf_counter()
     law = LuGreFriction(setup.lugre) if law is None else law
