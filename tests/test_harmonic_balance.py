@@ -23,9 +23,11 @@ from scipy.optimize import brentq
 from servotune.axis import load_axis
 from servotune.frequency import port_compliance
 from servotune.harmonic import (
+    ContinuationSettings,
     HarmonicSettings,
     PadBalance,
     curve_peak,
+    harmonics_from_samples,
     nonlinear_compliance,
     pad_receptance,
     periodic_friction_force,
@@ -230,3 +232,15 @@ def test_a_jenkins_oscillator_follows_its_describing_function():
     assert math.sqrt(kl / m) < omega[i] < math.sqrt((kl + k) / m)
     # the law was reached through the duck-typed interface
     assert periodic_friction_force(law, np.zeros(4), 0.1).shape == (4,)
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: HarmonicSettings(max_iterations=2.5), "max_iterations"),
+    (lambda: ContinuationSettings(arc_max=-1.0), "arc_max"),
+    (lambda: ContinuationSettings(max_iterations=0), "max_iterations"),
+    (lambda: harmonics_from_samples(np.ones(8), 4), "harmonics 1 to 3"),
+])
+def test_settings_and_sample_counts_that_cannot_work_are_refused(make, message):
+    # 8 samples resolve the harmonics up to 3 (Nyquist): the 4th would come back doubled
+    with pytest.raises(ValueError, match=message):
+        make()

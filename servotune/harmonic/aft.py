@@ -223,5 +223,9 @@ def harmonics_from_samples(values, harmonics: int) -> tuple[np.ndarray, np.ndarr
     """
     v = np.asarray(values, dtype=float)
     n = v.shape[-1]
+    if not 1 <= harmonics < n / 2:
+        raise ValueError(f"harmonics_from_samples: {n} samples resolve harmonics 1 to "
+                         f"{(n - 1) // 2}, not {harmonics} (give more samples than twice the "
+                         "harmonics)")
     spectrum = np.fft.rfft(v, axis=-1)
     return spectrum[..., 0].real / n, 2.0 * spectrum[..., 1:harmonics + 1] / n

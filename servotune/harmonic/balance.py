@@ -100,8 +100,11 @@ class HarmonicSettings:
         object.__setattr__(self, "samples", int(n))
         if not (0.0 < self.tolerance < 1e-2):
             raise ValueError(f"tolerance must be in (0, 0.01), got {self.tolerance!r}")
-        if int(self.max_iterations) < 1:
-            raise ValueError("max_iterations must be >= 1")
+        if (isinstance(self.max_iterations, bool) or int(self.max_iterations) != self.max_iterations
+                or self.max_iterations < 1):
+            raise ValueError("HarmonicSettings.max_iterations must be a whole number >= 1, got "
+                             f"{self.max_iterations!r}")
+        object.__setattr__(self, "max_iterations", int(self.max_iterations))
 
 
 class PadBalance:

@@ -75,6 +75,15 @@ class ContinuationSettings:
             raise ValueError("continuation needs 0 < step_min < step_max [rad/s]")
         if not (0.0 < self.max_angle < math.pi / 2):
             raise ValueError("max_angle must be in (0, pi/2) rad")
+        if not (0.0 < self.arc_max and math.isfinite(self.arc_max)):
+            raise ValueError(f"ContinuationSettings.arc_max must be finite and > 0, got "
+                             f"{self.arc_max!r}")
+        for name in ("fast", "max_iterations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or int(value) != value or value < 1:
+                raise ValueError(f"ContinuationSettings.{name} must be a whole number >= 1, "
+                                 f"got {value!r}")
+            object.__setattr__(self, name, int(value))
 
 
 @dataclass(frozen=True, eq=False)
