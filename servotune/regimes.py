@@ -44,6 +44,7 @@ from .friction.equivalent import describing_function
 from .friction.lugre import LuGreParameters, sliding_linearisation, stribeck_curve
 from .plant import Contact
 from .units import HZ_PER_RAD_S
+from .validation import positive
 
 __all__ = [
     "REGIME_KINDS",
@@ -55,13 +56,6 @@ __all__ = [
 ]
 
 REGIME_KINDS = ("presliding", "describing", "sliding", "viscous")
-
-
-def _finite_positive(owner: str, name: str, value) -> float:
-    value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise ValueError(f"{owner}.{name} must be finite and > 0, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -107,23 +101,21 @@ class Operation:
     defaults: tuple[str, ...] = field(default=(), compare=False)
 
     def __post_init__(self) -> None:
-        speeds = tuple(_finite_positive("Operation", "feed_speeds", v) for v in self.feed_speeds)
+        speeds = tuple(positive("Operation", "feed_speeds", v, "m/s") for v in self.feed_speeds)
         object.__setattr__(self, "feed_speeds", tuple(sorted(set(speeds))))
         if self.rapid_speed is not None:
             object.__setattr__(self, "rapid_speed",
-                               _finite_positive("Operation", "rapid_speed", self.rapid_speed))
+                               positive("Operation", "rapid_speed", self.rapid_speed, "m/s"))
             if self.feed_speeds and max(self.feed_speeds) > self.rapid_speed:
                 raise ValueError(f"Operation.feed_speeds ({max(self.feed_speeds):g} m/s) exceed "
                                  f"the rapid speed {self.rapid_speed:g} m/s")
         object.__setattr__(self, "acceleration",
-                           _finite_positive("Operation", "acceleration", self.acceleration))
+                           positive("Operation", "acceleration", self.acceleration, "m/s^2"))
         if self.process_force_pp is not None:
-            object.__setattr__(self, "process_force_pp", _finite_positive(
-                "Operation", "process_force_pp", self.process_force_pp))
-        force = float(self.feed_force)
-        if not (math.isfinite(force) and force >= 0.0):
-            raise ValueError(f"Operation.feed_force must be finite and >= 0 N, got {force!r}")
-        object.__setattr__(self, "feed_force", force)
+            object.__setattr__(self, "process_force_pp", positive(
+                "Operation", "process_force_pp", self.process_force_pp, "N"))
+        object.__setattr__(self, "feed_force", positive("Operation", "feed_force", self.feed_force,
+                                                        "N", allow_zero=True))
         if not self.standing and not self.feed_speeds:
             raise ValueError("Operation: no regime left (standing = false and no feed_speeds)")
 
@@ -213,14 +205,12 @@ class RegimeModel:
             raise ValueError(f"RegimeModel.kind must be one of {REGIME_KINDS}, got {self.kind!r}")
         if self.kind != "viscous" and not isinstance(self.friction, LuGreParameters):
             raise ValueError(f"a {self.kind} model needs the LuGre friction of the axis")
-        if self.kind == "sliding" and not (math.isfinite(self.speed) and self.speed > 0):
-            raise ValueError(f"a sliding model needs a speed > 0 m/s, got {self.speed!r}")
+        if self.kind == "sliding":
+            positive("RegimeModel", "speed", self.speed, "m/s", "a sliding model moves")
         if self.kind == "describing":
-            for name in ("amplitude", "frequency"):
-                value = getattr(self, name)
-                if value is None or not (math.isfinite(value) and value > 0):
-                    raise ValueError(f"a describing-function model needs {name} > 0, got "
-                                     f"{value!r}")
+            for name, unit in (("amplitude", "m"), ("frequency", "rad/s")):
+                positive("RegimeModel", name, getattr(self, name), unit,
+                         "a describing-function model needs it")
             base = dataclasses.replace(self.friction, sigma2=0.0)
             ceq, keq = describing_function(base, self.amplitude, self.frequency)
             object.__setattr__(self, "_keq_ceq", (float(keq), float(ceq)))

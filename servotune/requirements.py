@@ -33,6 +33,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .validation import positive
+
 __all__ = ["Requirements"]
 
 
@@ -48,7 +50,7 @@ class Requirements:
         Smallest allowed phase margin [deg], in (0, 90), and gain margin [dB], > 0; enforced
         through the Ms disk (each can only tighten the Ms limit, see `ms_limit`).
     kv_min : float
-        Smallest allowed position gain Kv [1/s], >= 0.
+        Smallest allowed position gain Kv [1/s], finite and >= 0.
     band : (float, float)
         Frequency band (low, high) [rad/s] of the compliance-peak objective, 0 < low < high.
     loop_band : (float, float)
@@ -94,10 +96,8 @@ class Requirements:
     def __post_init__(self) -> None:
         for name in ("thrust_margin", "bandwidth_ratio_min", "current_bandwidth_ratio_min",
                      "ti_bandwidth_min", "ti_bandwidth_max", "nonlinear_tolerance"):
-            value = float(getattr(self, name))
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"Requirements.{name} must be finite and >= 0, got {value!r}")
-            object.__setattr__(self, name, value)
+            object.__setattr__(self, name, positive("Requirements", name, getattr(self, name),
+                                                    allow_zero=True))
         if not self.thrust_margin < 1:
             raise ValueError("Requirements.thrust_margin is a fraction of the thrust in [0, 1)")
         for name in ("bandwidth_ratio_min", "current_bandwidth_ratio_min"):
@@ -115,11 +115,12 @@ class Requirements:
             raise ValueError("Requirements.phase_margin_min_deg must lie in (0, 90) deg")
         if self.gain_margin_min_db is not None and not self.gain_margin_min_db > 0:
             raise ValueError("Requirements.gain_margin_min_db must be > 0 dB")
-        if self.depth_required is not None and not (
-                self.depth_required > 0 and math.isfinite(self.depth_required)):
-            raise ValueError("Requirements.depth_required must be > 0 m")
-        if not self.kv_min >= 0:
-            raise ValueError("Requirements.kv_min must be >= 0 1/s")
+        if self.depth_required is not None:
+            object.__setattr__(self, "depth_required", positive(
+                "Requirements", "depth_required", self.depth_required, "m",
+                "leave it out (None) when no depth is required"))
+        object.__setattr__(self, "kv_min", positive("Requirements", "kv_min", self.kv_min, "1/s",
+                                                    allow_zero=True))
         for name in ("band", "loop_band"):
             lo, hi = (float(v) for v in getattr(self, name))
             if not 0 < lo < hi < math.inf:

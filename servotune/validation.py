@@ -17,6 +17,13 @@ ValueError: Design.kv must be finite and > 0 1/s, got -5.0
 Traceback (most recent call last):
 ...
 ValueError: NotchFilter.depth must be finite and in [0, 1), got 1.0
+
+The array checks show the first offending element and where it stands:
+
+>>> positive_array("lugre_cycle:", "omega", [10.0, 0.0], "rad/s")
+Traceback (most recent call last):
+...
+ValueError: lugre_cycle: omega must be finite and > 0 rad/s, got 0.0 (at index 1)
 """
 
 from __future__ import annotations
@@ -26,7 +33,7 @@ import numbers
 
 import numpy as np
 
-__all__ = ["finite", "fraction", "number", "positive"]
+__all__ = ["finite", "finite_array", "fraction", "number", "positive", "positive_array"]
 
 
 def _label(owner: str, name: str) -> str:
@@ -178,3 +185,86 @@ def fraction(owner: str, name: str, value, unit: str = "", hint: str = "", *,
         raise _fail(owner, name, "finite and in [0, 1]" if closed else "finite and in [0, 1)",
                     unit, value, hint)
     return value
+
+
+def _array_fail(owner, name, need, unit, value, bad, hint) -> ValueError:
+    index = tuple(int(i) for i in np.argwhere(bad)[0])
+    where = "" if value.ndim == 0 else f" (at index {index[0] if len(index) == 1 else index})"
+    shown = float(value[index]) if value.ndim else float(value)
+    unit = f" {unit}" if unit else ""
+    hint = f"; {hint}" if hint else ""
+    return ValueError(f"{_label(owner, name)} must be {need}{unit}, got {shown!r}{where}{hint}")
+
+
+def _real_array(owner, name, value, unit, hint) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise _fail(owner, name, "an array of numbers", f"in {unit}" if unit else "", value,
+                    hint) from None
+    return array
+
+
+def finite_array(owner: str, name: str, value, unit: str = "", hint: str = "") -> np.ndarray:
+    """Return ``value`` as a float array, refusing NaN and infinities in any element.
+
+    Parameters
+    ----------
+    owner, name : str
+        Owner and field, as for :func:`number`.
+    value : array_like
+        The values given (a scalar gives a 0-d array).
+    unit, hint : str, optional
+        Unit and hint, as for :func:`finite`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``numpy.asarray(value, dtype=float)``.
+
+    Raises
+    ------
+    ValueError
+        If the values are not numbers, or one is not finite (the message shows the first such
+        element and its index).
+    """
+    array = _real_array(owner, name, value, unit, hint)
+    bad = ~np.isfinite(array)
+    if np.any(bad):
+        raise _array_fail(owner, name, "finite", unit, array, bad, hint)
+    return array
+
+
+def positive_array(owner: str, name: str, value, unit: str = "", hint: str = "", *,
+                   allow_zero: bool = False) -> np.ndarray:
+    """Return ``value`` as a float array if every element is finite and > 0 (or >= 0).
+
+    Parameters
+    ----------
+    owner, name : str
+        Owner and field, as for :func:`number`.
+    value : array_like
+        The values given (a scalar gives a 0-d array).
+    unit, hint : str, optional
+        Unit and hint, as for :func:`finite`.
+    allow_zero : bool, optional
+        Accept 0 (the check is then ``>= 0``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``numpy.asarray(value, dtype=float)``.
+
+    Raises
+    ------
+    ValueError
+        If the values are not numbers, or one is NaN, infinite, negative or zero (unless
+        ``allow_zero``); the message shows the first such element and its index.
+    """
+    array = _real_array(owner, name, value, unit, hint)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(array) & ((array >= 0.0) if allow_zero else (array > 0.0))
+    if not np.all(ok):
+        need = "finite and >= 0" if allow_zero else "finite and > 0"
+        raise _array_fail(owner, name, need, unit, array, ~ok, hint)
+    return array

@@ -18,11 +18,11 @@ Y. Altintas, Manufacturing Automation, 2nd ed., Cambridge University Press (2012
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..validation import positive
 from .setup import DIRECTIONS, MillingSetup, periodic_directional_matrix
 
 __all__ = ["CuttingForce", "cutting_force"]
@@ -113,9 +113,8 @@ def cutting_force(setup: MillingSetup, depth: float, feed_per_tooth: float,
     """
     if direction not in DIRECTIONS:
         raise ValueError(f"direction must be one of {DIRECTIONS}, got {direction!r}")
-    for name, value in (("depth", depth), ("feed_per_tooth", feed_per_tooth)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive length [m], got {value!r}")
+    depth = positive("cutting_force:", "depth", depth, "m")
+    feed_per_tooth = positive("cutting_force:", "feed_per_tooth", feed_per_tooth, "m")
     h = periodic_directional_matrix(setup, int(samples))
     row = DIRECTIONS.index(direction)
     force = -float(depth) * float(feed_per_tooth) * h[:, row, 0]

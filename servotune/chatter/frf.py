@@ -29,6 +29,7 @@ import control
 import numpy as np
 
 from ..tablefile import read_table
+from ..validation import number, positive, positive_array
 from .setup import DIRECTIONS, _direction_index
 
 __all__ = [
@@ -77,17 +78,13 @@ class Mode:
     direction: str = "x"
 
     def __post_init__(self) -> None:
-        for name, bad in (("natural_frequency (rad/s)", self.natural_frequency),
-                          ("stiffness (N/m)", self.stiffness)):
-            value = float(bad)
-            if not math.isfinite(value) or value <= 0.0:
-                raise ValueError(f"mode {name} must be a positive finite number, got {bad!r}")
-        zeta = float(self.damping_ratio)
+        object.__setattr__(self, "natural_frequency", positive(
+            "Mode", "natural_frequency", self.natural_frequency, "rad/s"))
+        object.__setattr__(self, "stiffness", positive("Mode", "stiffness", self.stiffness, "N/m"))
+        zeta = number("Mode", "damping_ratio", self.damping_ratio)
         if not 0.0 < zeta < 1.0:
-            raise ValueError(f"mode damping_ratio must lie in (0, 1), got {self.damping_ratio!r}")
-        object.__setattr__(self, "natural_frequency", float(self.natural_frequency))
+            raise ValueError(f"Mode.damping_ratio must lie in (0, 1), got {self.damping_ratio!r}")
         object.__setattr__(self, "damping_ratio", zeta)
-        object.__setattr__(self, "stiffness", float(self.stiffness))
         object.__setattr__(self, "direction", DIRECTIONS[_direction_index(self.direction)])
 
     @classmethod
@@ -263,11 +260,13 @@ def system_response(system, omega) -> np.ndarray:
 
 
 def _check_omega(omega) -> np.ndarray:
-    omega = np.asarray(omega, dtype=float)
+    omega = positive_array("", "omega", omega, "rad/s")
     if omega.ndim != 1 or omega.size < 3:
         raise ValueError("omega must be a 1-D array of at least 3 frequencies [rad/s]")
-    if not np.all(np.isfinite(omega)) or omega[0] <= 0.0 or np.any(np.diff(omega) <= 0.0):
-        raise ValueError("omega must be finite, positive and strictly increasing [rad/s]")
+    if np.any(np.diff(omega) <= 0.0):
+        i = int(np.argmax(np.diff(omega) <= 0.0))
+        raise ValueError(f"omega must be strictly increasing [rad/s], got {float(omega[i])!r} "
+                         f"then {float(omega[i + 1])!r} (at index {i + 1})")
     return omega
 
 

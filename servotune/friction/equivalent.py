@@ -34,6 +34,7 @@ import math
 
 import numpy as np
 
+from ..validation import positive_array
 from . import _exponential
 from .lugre import LuGreParameters, _rate, _steady_deflection, micro_damping
 
@@ -53,13 +54,6 @@ DESCRIBING_FUNCTION_STEPS = 512
 #: and at least MIN_BETA times the uniform step.
 GRADING = 4.0
 MIN_BETA = 0.02
-
-
-def _positive(name: str, value) -> np.ndarray:
-    value = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(value)) or np.any(value <= 0.0):
-        raise ValueError(f"{name} must be positive and finite")
-    return value
 
 
 def equivalent_damping_stiction(fs, sigma0, amplitude, omega) -> np.ndarray:
@@ -112,10 +106,10 @@ def equivalent_damping_stiction(fs, sigma0, amplitude, omega) -> np.ndarray:
     >>> float(equivalent_damping_stiction(6013.0, 5.9e9, 1e-6, w))   # below Fs/sigma0
     0.0
     """
-    fs = _positive("fs", fs)
-    sigma0 = _positive("sigma0", sigma0)
-    amplitude = _positive("amplitude", amplitude)
-    omega = _positive("omega", omega)
+    fs = positive_array("equivalent_damping_stiction:", "fs", fs, "N")
+    sigma0 = positive_array("equivalent_damping_stiction:", "sigma0", sigma0, "N/m")
+    amplitude = positive_array("equivalent_damping_stiction:", "amplitude", amplitude, "m")
+    omega = positive_array("equivalent_damping_stiction:", "omega", omega, "rad/s")
     slip = np.maximum(amplitude - fs / sigma0, 0.0)
     return 4.0 * fs * slip / (math.pi * omega * amplitude**2)
 
@@ -195,9 +189,9 @@ def stiction_peak_damping(fs, sigma0, omega) -> tuple[np.ndarray, np.ndarray]:
     >>> round(float(a) * 1e6, 3), round(float(c) / 1e7, 4)
     (2.038, 1.4945)
     """
-    fs = _positive("fs", fs)
-    sigma0 = _positive("sigma0", sigma0)
-    omega = _positive("omega", omega)
+    fs = positive_array("stiction_peak_damping:", "fs", fs, "N")
+    sigma0 = positive_array("stiction_peak_damping:", "sigma0", sigma0, "N/m")
+    omega = positive_array("stiction_peak_damping:", "omega", omega, "rad/s")
     return 2.0 * fs / sigma0, sigma0 / (math.pi * omega)
 
 
@@ -234,7 +228,7 @@ def describing_function(params: LuGreParameters, amplitude, omega,
     See Also
     --------
     servotune.analysis.compliance_curve : The compliance with an ``equivalent`` contact, whose
-        Ceq and Keq this gives (:meth:`servotune.plant.GuideWayFriction.contact`).
+        Ceq and Keq this gives (:func:`servotune.plant.friction_contact`).
     servotune.simulate.simulator.simulate : The time response with the full LuGre law, the
         check of the linear equivalent.
     stiction_describing_function : The closed form of the paper's idealised cycle.
@@ -289,8 +283,8 @@ def describing_function(params: LuGreParameters, amplitude, omega,
     >>> bool(abs(float(ceq) / float(closed) - 1.0) < 0.3)
     True
     """
-    amplitude = _positive("amplitude", amplitude)
-    omega = _positive("omega", omega)
+    amplitude = positive_array("describing_function:", "amplitude", amplitude, "m")
+    omega = positive_array("describing_function:", "omega", omega, "rad/s")
     n_steps = int(n_steps)
     if n_steps < 8 or n_steps % 4:
         raise ValueError(f"n_steps must be a multiple of 4 and >= 8, got {n_steps}")

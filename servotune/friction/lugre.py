@@ -63,6 +63,7 @@ import control
 import numpy as np
 from scipy import interpolate
 
+from ..validation import finite, finite_array, positive, positive_array
 from . import _exponential
 
 __all__ = [
@@ -87,13 +88,6 @@ __all__ = [
 ]
 
 DEFAULT_CYCLE_STEPS = 1024
-
-
-def _finite(name: str, value) -> float:
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -158,38 +152,32 @@ class LuGreParameters:
     sigma1_decay_speed: float | None = None
 
     def __post_init__(self) -> None:
-        for field in dataclasses.fields(self):
-            value = getattr(self, field.name)
-            if field.name == "sigma1_decay_speed":
-                if value is None:
-                    continue
-                if isinstance(value, bool):
-                    raise ValueError(f"sigma1_decay_speed must be a speed [m/s] or None, got "
-                                     f"{value!r}")
-            object.__setattr__(self, field.name, _finite(field.name, value))
-        if self.fc <= 0.0:
-            raise ValueError(f"fc (Coulomb friction) must be > 0 N, got {self.fc!r}")
+        owner = "LuGreParameters"
+        checks = {
+            "fc": ("fc (Coulomb friction)", "N", False, ""),
+            "fs": ("fs (static friction)", "N", True, ""),
+            "vs": ("vs (Stribeck velocity)", "m/s", False, ""),
+            "delta": ("delta (Stribeck exponent)", "", False, ""),
+            "sigma0": ("sigma0 (bristle stiffness)", "N/m", False, ""),
+            "sigma1": ("sigma1 (bristle damping)", "N s/m", True,
+                       "a negative sigma1 makes the contact generate energy at small amplitude "
+                       "(non-passive); the paper's table prints -1.6e7, use +1.6e7"),
+            "sigma2": ("sigma2 (viscous friction)", "N s/m", True, ""),
+            "sigma1_decay_speed": ("sigma1_decay_speed (micro-damping decay speed v_d)", "m/s",
+                                   False, "leave it out (None) for a constant sigma1"),
+        }
+        for name, (label, unit, allow_zero, hint) in checks.items():
+            value = getattr(self, name)
+            if name == "sigma1_decay_speed" and value is None:
+                continue
+            if isinstance(value, str):   # a number written as text (a table cell)
+                value = float(value)
+            object.__setattr__(self, name, positive(owner, label, value, unit, hint,
+                                                    allow_zero=allow_zero))
         if self.fs < self.fc:
             raise ValueError(
                 f"fs (static friction, {self.fs!r} N) must be >= fc (Coulomb friction, "
                 f"{self.fc!r} N)")
-        if self.vs <= 0.0:
-            raise ValueError(f"vs (Stribeck velocity) must be > 0 m/s, got {self.vs!r}")
-        if self.delta <= 0.0:
-            raise ValueError(f"delta (Stribeck exponent) must be > 0, got {self.delta!r}")
-        if self.sigma0 <= 0.0:
-            raise ValueError(f"sigma0 (bristle stiffness) must be > 0 N/m, got {self.sigma0!r}")
-        if self.sigma1 < 0.0:
-            raise ValueError(
-                f"sigma1 (bristle damping) must be >= 0 N s/m, got {self.sigma1!r}: a negative "
-                "sigma1 makes the contact generate energy at small amplitude (non-passive); the "
-                "paper's table prints -1.6e7, use +1.6e7")
-        if self.sigma2 < 0.0:
-            raise ValueError(f"sigma2 (viscous friction) must be >= 0 N s/m, got {self.sigma2!r}")
-        if self.sigma1_decay_speed is not None and self.sigma1_decay_speed <= 0.0:
-            raise ValueError(
-                f"sigma1_decay_speed (micro-damping decay speed v_d) must be > 0 m/s, got "
-                f"{self.sigma1_decay_speed!r}; leave it out (None) for a constant sigma1")
 
     @classmethod
     def named(cls, name: str) -> LuGreParameters:
@@ -250,9 +238,7 @@ class LuGreParameters:
         ValueError
             If ``factor`` is not finite and > 0.
         """
-        factor = _finite("factor", factor)
-        if factor <= 0.0:
-            raise ValueError(f"factor must be > 0, got {factor!r}")
+        factor = positive("LuGreParameters.scale:", "factor", factor)
         return dataclasses.replace(
             self, fc=self.fc * factor, fs=self.fs * factor, sigma0=self.sigma0 * factor,
             sigma1=self.sigma1 * factor, sigma2=self.sigma2 * factor)
@@ -288,13 +274,6 @@ CANUDAS1995 = LuGreParameters(fc=1.0, fs=1.5, vs=0.001, delta=2.0, sigma0=1e5,
 _NAMED = types.MappingProxyType({"bianchi2014": BIANCHI2014, "canudas1995": CANUDAS1995})
 
 
-def _array(name: str, value) -> np.ndarray:
-    value = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(value)):
-        raise ValueError(f"{name} must be finite")
-    return value
-
-
 def _stribeck_exp(params: LuGreParameters, v: np.ndarray) -> np.ndarray:
     return np.exp(-np.abs(v / params.vs) ** params.delta)
 
@@ -328,7 +307,7 @@ def stribeck_curve(params: LuGreParameters, v) -> np.ndarray:
     >>> float(stribeck_curve(p, 0.0)), round(float(stribeck_curve(p, 1.0)), 6)
     (6013.0, 2198.0)
     """
-    v = _array("v", v)
+    v = finite_array("stribeck_curve:", "v", v, "m/s")
     return params.fc + (params.fs - params.fc) * _stribeck_exp(params, v)
 
 
@@ -369,7 +348,7 @@ def steady_state_friction(params: LuGreParameters, v) -> np.ndarray:
     >>> round(float(steady_state_friction(p, 0.5)), 1) == round(2198.0 + 5578.0 * 0.5, 1)
     True
     """
-    v = _array("v", v)
+    v = finite_array("steady_state_friction:", "v", v, "m/s")
     return stribeck_curve(params, v) * np.sign(v) + params.sigma2 * v
 
 
@@ -396,7 +375,7 @@ def steady_state_slope(params: LuGreParameters, v) -> np.ndarray:
     ValueError
         If ``v`` is not finite.
     """
-    v = _array("v", v)
+    v = finite_array("steady_state_slope:", "v", v, "m/s")
     return _stribeck_derivative(params, v) * np.sign(v) + params.sigma2
 
 
@@ -431,8 +410,8 @@ def lugre_derivative(params: LuGreParameters, z, v) -> np.ndarray:
     >>> abs(float(lugre_derivative(p, z_ss, 0.01))) < 1e-15
     True
     """
-    z = _array("z", z)
-    v = _array("v", v)
+    z = finite_array("lugre_derivative:", "z", z, "m")
+    v = finite_array("lugre_derivative:", "v", v, "m/s")
     return v - params.sigma0 * np.abs(v) * z / stribeck_curve(params, v)
 
 
@@ -467,7 +446,7 @@ def micro_damping(params: LuGreParameters, v) -> np.ndarray:
     >>> bool(abs(float(micro_damping(p, -0.01)) - p.sigma1 / math.e) < 1e-6)
     True
     """
-    v = _array("v", v)
+    v = finite_array("micro_damping:", "v", v, "m/s")
     if params.sigma1_decay_speed is None:
         return np.full_like(v, params.sigma1)
     return params.sigma1 * np.exp(-((v / params.sigma1_decay_speed) ** 2))
@@ -505,8 +484,8 @@ def lugre_force(params: LuGreParameters, z, v) -> np.ndarray:
     ValueError
         If ``z`` or ``v`` is not finite.
     """
-    z = _array("z", z)
-    v = _array("v", v)
+    z = finite_array("lugre_force:", "z", z, "m")
+    v = finite_array("lugre_force:", "v", v, "m/s")
     return (params.sigma0 * z + micro_damping(params, v) * lugre_derivative(params, z, v)
             + params.sigma2 * v)
 
@@ -566,8 +545,8 @@ def lugre_jacobian(params: LuGreParameters, z, v) -> LuGreJacobian:
     >>> bool(abs(dc - float(steady_state_slope(p, v0))) < 1e-9)
     True
     """
-    z = _array("z", z)
-    v = _array("v", v)
+    z = finite_array("lugre_jacobian:", "z", z, "m")
+    v = finite_array("lugre_jacobian:", "v", v, "m/s")
     g = stribeck_curve(params, v)
     dg = _stribeck_derivative(params, v)
     dzdot_dz = -params.sigma0 * np.abs(v) / g
@@ -668,7 +647,7 @@ def sliding_linearisation(params: LuGreParameters, v0: float) -> control.StateSp
     >>> round(float(sliding_linearisation(q, 0.03).D[0, 0]))
     5107
     """
-    v0 = _finite("v0", v0)
+    v0 = finite("sliding_linearisation:", "v0", v0, "m/s")
     if v0 == 0.0:
         raise ValueError("v0 must be non-zero for the sliding linearisation; at rest use "
                          "presliding_linearisation()")
@@ -729,11 +708,12 @@ def _history(t: np.ndarray, displacement, velocity):
             raise ValueError("displacement must be samples on t; a callable is accepted for "
                              "velocity only")
         vfun = given
-        samples = _array("velocity(t)", vfun(t))
+        samples = finite_array("simulate_lugre:", "velocity(t)", vfun(t), "m/s")
         spline = interpolate.CubicSpline(t, samples)
         xfun = spline.antiderivative()
         return xfun, vfun, spline
-    samples = _array(name, given)
+    samples = finite_array("simulate_lugre:", name, given,
+                           "m" if displacement is not None else "m/s")
     if samples.shape != t.shape:
         raise ValueError(f"{name} must have the shape of t {t.shape}, got {samples.shape}")
     spline = interpolate.CubicSpline(t, samples)
@@ -791,10 +771,10 @@ def simulate_lugre(params: LuGreParameters, t, *, displacement=None, velocity=No
     >>> bool(abs(r.force[-1] - float(steady_state_friction(p, 0.002))) < 1e-9)
     True
     """
-    t = _array("t", t)
+    t = finite_array("simulate_lugre:", "t", t, "s")
     if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0.0):
         raise ValueError("t must be a 1-D strictly increasing array of at least 2 times [s]")
-    z0 = _finite("z0", z0)
+    z0 = finite("simulate_lugre:", "z0", z0, "m")
     xfun, vfun, vspline = _history(t, displacement, velocity)
     # put every velocity reversal on a step boundary
     roots = np.asarray(vspline.roots(extrapolate=False), dtype=float)
@@ -936,12 +916,8 @@ def lugre_cycle(params: LuGreParameters, amplitude, omega,
     >>> round(float(c.keq) / p.sigma0, 3), round(float(c.ceq) / (p.sigma1 + p.sigma2), 3)
     (1.0, 1.0)
     """
-    amplitude = _array("amplitude", amplitude)
-    omega = _array("omega", omega)
-    if np.any(amplitude <= 0.0):
-        raise ValueError("amplitude must be > 0 m")
-    if np.any(omega <= 0.0):
-        raise ValueError("omega must be > 0 rad/s")
+    amplitude = positive_array("lugre_cycle:", "amplitude", amplitude, "m")
+    omega = positive_array("lugre_cycle:", "omega", omega, "rad/s")
     n_steps = int(n_steps)
     if n_steps < 8 or n_steps % 4:
         raise ValueError(f"n_steps must be a multiple of 4 and >= 8, got {n_steps}")

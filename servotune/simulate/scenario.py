@@ -18,25 +18,20 @@ Motions start from rest: a constant speed is reached by a smooth start (velocity
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..validation import finite, positive
+
 __all__ = ["Scenario", "sine_sweep", "constant_speed", "point_to_point", "sinusoid", "circle",
            "custom", "sweep_phase", "sweep_frequency", "SweepPlan", "sweep_plan",
            "planned_sweep"]
 
 DEFAULT_START = 0.2   # [s] smooth start to a constant speed
-
-
-def _positive(name, value, allow_zero=False):
-    value = float(value)
-    if not math.isfinite(value) or value < 0.0 or (value == 0.0 and not allow_zero):
-        need = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be finite and {need}, got {value!r}")
-    return value
 
 
 def _zero(t):
@@ -80,11 +75,8 @@ class Scenario:
     sweep: tuple | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "duration", _positive("Scenario.duration", self.duration))
-        speed = float(self.speed)
-        if not math.isfinite(speed):
-            raise ValueError(f"Scenario.speed must be finite, got {self.speed!r}")
-        object.__setattr__(self, "speed", speed)
+        object.__setattr__(self, "duration", positive("Scenario", "duration", self.duration, "s"))
+        object.__setattr__(self, "speed", finite("Scenario", "speed", self.speed, "m/s"))
         forces = dict(self.forces)
         for dof, fun in forces.items():
             if not callable(fun):
@@ -227,16 +219,17 @@ def sine_sweep(force_pp: float, f_start_hz: float = 10.0, f_end_hz: float = 100.
     >>> float(np.max(sc.forces["wp.x"](np.linspace(0, 20, 200001))))   # amplitude = pp / 2
     50.0
     """
-    force_pp = _positive("force_pp", force_pp)
-    f_start_hz = _positive("f_start_hz", f_start_hz)
-    f_end_hz = _positive("f_end_hz", f_end_hz)
-    duration = _positive("duration", duration)
+    force_pp = positive("sine_sweep:", "force_pp", force_pp, "N")
+    f_start_hz = positive("sine_sweep:", "f_start_hz", f_start_hz, "Hz")
+    f_end_hz = positive("sine_sweep:", "f_end_hz", f_end_hz, "Hz")
+    duration = positive("sine_sweep:", "duration", duration, "s")
     amplitude = 0.5 * force_pp
 
     def force(t):
         return amplitude * np.sin(sweep_phase(t, f_start_hz, f_end_hz, duration))
 
-    motion = _smooth_start(float(speed), _positive("start", start, True)) if speed else None
+    motion = (_smooth_start(float(speed), positive("sine_sweep:", "start", start, "s",
+                                                   allow_zero=True)) if speed else None)
     label = (f"sine sweep {f_start_hz:g}-{f_end_hz:g} Hz in {duration:g} s, {force_pp:g} N "
              f"p-p, {speed * 1e3:g} mm/s")
     return Scenario(duration=duration, motion=motion, forces={dof: force}, speed=float(speed),
@@ -398,7 +391,8 @@ def sweep_plan(f_start_hz: float, f_end_hz: float, amplitude: float, resonances=
     >>> round(float(rate), 2), round(4 * math.pi * 0.03**2 * 50**2 / 4, 2)
     (7.07, 7.07)
     """
-    f0, f1 = _positive("f_start_hz", f_start_hz), _positive("f_end_hz", f_end_hz)
+    f0 = positive("sweep_plan:", "f_start_hz", f_start_hz, "Hz")
+    f1 = positive("sweep_plan:", "f_end_hz", f_end_hz, "Hz")
     if not f1 > f0:
         raise ValueError(f"the sweep needs f_start_hz < f_end_hz, got {f0:g}, {f1:g}")
     f = np.geomspace(f0, f1, 4000)
@@ -455,9 +449,9 @@ def planned_sweep(force_pp: float, plan: SweepPlan, speed: float = 0.0, dof: str
         If ``force_pp`` is not finite and > 0, or ``settle``, ``ring_down`` or ``start`` is
         negative.
     """
-    force_pp = _positive("force_pp", force_pp)
+    force_pp = positive("planned_sweep:", "force_pp", force_pp, "N")
     amplitude = 0.5 * force_pp
-    t0 = _positive("settle", settle, True)
+    t0 = positive("planned_sweep:", "settle", settle, "s", allow_zero=True)
     plan = SweepPlan(plan.t + t0, plan.phase, plan.frequency_hz, amplitude, plan.slow)
     t_end = float(plan.t[-1])
 
@@ -466,10 +460,12 @@ def planned_sweep(force_pp: float, plan: SweepPlan, speed: float = 0.0, dof: str
         on = (t >= t0) & (t <= t_end)
         return np.where(on, amplitude * np.sin(plan.phase_at(t)), 0.0)
 
-    motion = _smooth_start(float(speed), _positive("start", start, True)) if speed else None
+    motion = (_smooth_start(float(speed), positive("planned_sweep:", "start", start, "s",
+                                                   allow_zero=True)) if speed else None)
     label = (f"sine sweep {plan.f_start_hz:g}-{plan.f_end_hz:g} Hz in "
              f"{plan.duration - t0:.3g} s, {force_pp:g} N p-p, {speed * 1e3:g} mm/s")
-    return Scenario(duration=t_end + _positive("ring_down", ring_down, True), motion=motion,
+    ring_down = positive("planned_sweep:", "ring_down", ring_down, "s", allow_zero=True)
+    return Scenario(duration=t_end + ring_down, motion=motion,
                     forces={dof: force}, speed=float(speed), name=label, sweep=plan)
 
 
@@ -496,8 +492,8 @@ def constant_speed(speed: float, duration: float, start: float = DEFAULT_START) 
         If ``duration`` is not finite and > 0, ``start`` is negative, or ``speed`` is not
         finite.
     """
-    return Scenario(duration=duration, motion=_smooth_start(float(speed),
-                                                            _positive("start", start, True)),
+    start = positive("constant_speed:", "start", start, "s", allow_zero=True)
+    return Scenario(duration=duration, motion=_smooth_start(float(speed), start),
                     speed=float(speed), name=f"constant speed {speed * 1e3:g} mm/s")
 
 
@@ -536,19 +532,19 @@ def point_to_point(points, speed: float, acceleration: float, dwell: float = 0.0
     points = np.asarray(points, dtype=float)
     if points.ndim != 1 or points.size < 2 or points[0] != 0.0:
         raise ValueError("points must list at least two positions [m], starting at 0")
-    speed = _positive("speed", speed)
-    acc = _positive("acceleration", acceleration)
-    dwell = _positive("dwell", dwell, True)
+    speed = positive("point_to_point:", "speed", speed, "m/s")
+    acc = positive("point_to_point:", "acceleration", acceleration, "m/s^2")
+    dwell = positive("point_to_point:", "dwell", dwell, "s", allow_zero=True)
     segs = []   # (t0, x0, direction, t_acc, v_peak, t_flat)
     t0 = 0.0
-    for x0, x1 in zip(points[:-1], points[1:], strict=True):
+    for x0, x1 in itertools.pairwise(points):
         dist = abs(x1 - x0)
         vp = min(speed, math.sqrt(dist * acc))
         ta = vp / acc
         tf = (dist - vp * ta) / vp if vp > 0 else 0.0
         segs.append((t0, x0, math.copysign(1.0, x1 - x0), ta, vp, tf))
         t0 += 2 * ta + tf + dwell
-    total = t0 if duration is None else _positive("duration", duration)
+    total = t0 if duration is None else positive("point_to_point:", "duration", duration, "s")
     starts = np.array([seg[0] for seg in segs])
 
     def motion(t):
@@ -598,8 +594,8 @@ def sinusoid(amplitude: float, period: float, cycles: float = 2.0) -> Scenario:
     ValueError
         If a value is not finite and > 0.
     """
-    amplitude = _positive("amplitude", amplitude)
-    period = _positive("period", period)
+    amplitude = positive("sinusoid:", "amplitude", amplitude, "m")
+    period = positive("sinusoid:", "period", period, "s")
     w = 2.0 * math.pi / period
 
     def motion(t):
@@ -607,7 +603,7 @@ def sinusoid(amplitude: float, period: float, cycles: float = 2.0) -> Scenario:
         return (amplitude * (1 - np.cos(w * t)), amplitude * w * np.sin(w * t),
                 amplitude * w * w * np.cos(w * t))
 
-    return Scenario(duration=_positive("cycles", cycles) * period, motion=motion,
+    return Scenario(duration=positive("sinusoid:", "cycles", cycles, "") * period, motion=motion,
                     name=f"sinusoid {amplitude * 1e6:g} um, {period:g} s")
 
 
@@ -636,8 +632,8 @@ def circle(radius: float, period: float, cycles: float = 2.0) -> Scenario:
     ValueError
         If a value is not finite and > 0.
     """
-    radius = _positive("radius", radius)
-    period = _positive("period", period)
+    radius = positive("circle:", "radius", radius, "m")
+    period = positive("circle:", "period", period, "s")
     w = 2.0 * math.pi / period
 
     def motion(t):
@@ -645,7 +641,7 @@ def circle(radius: float, period: float, cycles: float = 2.0) -> Scenario:
         return (radius * (np.cos(w * t) - 1), -radius * w * np.sin(w * t),
                 -radius * w * w * np.cos(w * t))
 
-    return Scenario(duration=_positive("cycles", cycles) * period, motion=motion,
+    return Scenario(duration=positive("circle:", "cycles", cycles, "") * period, motion=motion,
                     name=f"circle X, radius {radius * 1e6:g} um, {period:g} s")
 
 
