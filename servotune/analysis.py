@@ -313,9 +313,22 @@ class ComplianceCurve:
                 "peak_at_edge": self.at_edge}
 
 
-def _curve(label, plant, omega, band) -> ComplianceCurve:
-    values = frequency.compliance(plant, omega)
+def _in_band(omega: np.ndarray, band) -> np.ndarray:
+    """The points of ``omega`` inside ``band``; a ValueError naming both when there are none."""
     sel = (omega >= band[0]) & (omega <= band[1])
+    if not np.any(sel):
+        grid = (f"{omega.min():.4g} to {omega.max():.4g} rad/s, {omega.size} points"
+                if omega.size else "empty")
+        raise ValueError(
+            f"no point of omega ({grid}) lies in the requirement band {band[0]:.4g} to "
+            f"{band[1]:.4g} rad/s ({band[0] * HZ_PER_RAD_S:.4g} to {band[1] * HZ_PER_RAD_S:.4g} "
+            "Hz): give omega points inside the band")
+    return sel
+
+
+def _curve(label, plant, omega, band) -> ComplianceCurve:
+    sel = _in_band(omega, band)
+    values = frequency.compliance(plant, omega)
     value, where = frequency.peak(omega[sel], values[sel])
     return ComplianceCurve(label, omega, values, value, where, (float(band[0]), float(band[1])))
 
@@ -370,6 +383,7 @@ def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, o
     omega = default_omega() if omega is None else np.asarray(omega, float)
     if controlled is None:
         controlled = drive is not None or axis.drive is not None
+    _in_band(omega, axis.requirements.band)
     plant = axis_plant(axis, contact, drive, controlled=controlled)
     return _curve(label or contact.note or contact.kind, plant, omega, axis.requirements.band)
 
@@ -400,6 +414,7 @@ def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[Compliance
         A negative C, an axis without ``[friction]``, or no point of ``omega`` in the band.
     """
     omega = default_omega() if omega is None else np.asarray(omega, float)
+    _in_band(omega, axis.requirements.band)
     curves = []
     for c in c_values:
         plant = axis_plant(axis, Contact.viscous(c), controlled=False)

@@ -9,9 +9,10 @@ Two independent ways of evaluating the closed-loop axis are provided:
   eigenvalues are split off into a small triangular block; the complex Schur form (O(n^2) per
   frequency, backward stable) is the last resort. Every form but the last is checked a
   posteriori against direct solves at a few frequencies.
-* :func:`port_compliance` never builds the closed-loop state space: it takes the structure's
-  receptance at the ports (work piece, pads, motor, encoder) from the modal sum and closes the
-  contacts and the cascade around it with a small complex linear system per frequency. The
+* :func:`port_compliance` does not evaluate the closed-loop state space: it takes the
+  structure's receptance at the ports (work piece, pads, motor, encoder) from the modal sum and
+  closes the contacts and the cascade around it with a small complex linear system per
+  frequency (the state space serves only its stability check, one eigenvalue problem). The
   tuning evaluates the same equations in real arithmetic.
 
 Loop analysis (:func:`analyse_loop`) gives gain and phase margins, the sensitivity peak
@@ -37,7 +38,7 @@ import numpy as np
 import scipy.linalg
 
 from .drive import Drive, cascade_response
-from .plant import Contact, UnstableLoopError
+from .plant import Contact, UnstableLoopError, build_plant
 from .structure.model import ModalModel
 from .units import HZ_PER_RAD_S
 
@@ -473,7 +474,7 @@ def _tf_values(tf, s: np.ndarray) -> np.ndarray:
 
 def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
                     contact: Contact | None = None, pads=(), force: str = "wp.x",
-                    outputs=("wp.x",)) -> np.ndarray:
+                    outputs=("wp.x",), check_stability: bool = False) -> np.ndarray:
     """Closed-loop compliance by coupling the structure's port receptances (no state space).
 
     The contacts and the motor act on the structure through a few generalised forces: the
@@ -506,12 +507,20 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
         Guide-way model, axis totals shared equally by the pads (default: free). A ``locked``
         contact removes the pad DOFs from the structure.
     pads : sequence of str
-        The pad DOFs where the contact acts (ignored by a ``free`` contact; with none, a
-        contact acting at the pads adds nothing).
+        The pad DOFs where the contact acts (ignored by a ``free`` contact; any other contact
+        needs them).
     force : str
         DOF of the exciting force [N].
     outputs : sequence of str
         DOFs whose displacements [m] are returned.
+    check_stability : bool, optional
+        Check, as :func:`compliance` does, that the coupled system is stable (its poles from
+        :func:`~servotune.plant.build_plant` and :func:`require_stable`) when it can be
+        unstable: with a drive, or with a dynamic (sliding) contact; springs and dampers
+        alone on the structure are passive and are not checked. Off by default: the check
+        builds the closed loop's state space and solves its eigenvalue problem, several
+        times the cost of the coupling itself, and the callers that judge designs check (or
+        report) stability on their own. Pass True wherever the stability is not known.
 
     Returns
     -------
@@ -521,18 +530,27 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
     Raises
     ------
     ValueError
-        If ``omega`` is not a 1-D array of finite frequencies >= 0.
+        If ``omega`` is not a 1-D array of finite frequencies >= 0, or a contact other than
+        ``free`` is given without pads.
+    UnstableLoopError
+        If ``check_stability`` and the coupled system is unstable (the message names the
+        unstable poles): a compliance of an unstable loop means nothing.
     UnknownDofError
         A force, output, pad, motor or encoder DOF the structure does not have.
 
     Notes
     -----
-    Unlike :func:`compliance`, the stability of the closed loop is not checked: for an
-    unstable loop the result is the (meaningless) steady-state response formula.
+    Without ``check_stability`` the stability of the loop is not checked: for an unstable
+    loop the result is the (meaningless) steady-state response formula.
     """
     omega = _omega(omega)
     contact = Contact.free() if contact is None else contact
     pads = list(pads)
+    if contact.pads != "free" and not pads:
+        raise ValueError(f"a {contact.kind!r} contact needs the pad DOFs (pads=...)")
+    if check_stability and (drive is not None or contact.system is not None):
+        what = "closed-loop axis" if drive is not None else "axis with its sliding contact"
+        require_stable(build_plant(structure, drive, contact, pads), what=what)
     if contact.pads == "locked":
         structure = structure.locked(pads)
     if contact.pads != "contact":
@@ -927,12 +945,38 @@ def closed_loop_poles(sys: control.StateSpace) -> ClosedLoopPoles:
     return ClosedLoopPoles(p, wn, zeta)
 
 
+def _pole_resolution(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues of ``a`` and how far rounding can move each of them [rad/s].
+
+    The first-order bound ``eps ||A_b|| kappa_i`` on the balanced matrix A_b, with the
+    eigenvalue's condition number ``kappa_i = |y_i| |x_i| / |y_i^H x_i|`` (left and right
+    eigenvectors), capped at ``kappa = 1/sqrt(eps)`` for a defective (Jordan) eigenvalue.
+    """
+    if not a.size:
+        return np.array([], dtype=complex), np.array([])
+    a_b, _ = scipy.linalg.matrix_balance(a, permute=False)
+    lam, left, right = scipy.linalg.eig(a_b, left=True, right=True)
+    eps = np.finfo(float).eps
+    overlap = np.abs(np.sum(left.conj() * right, axis=0))
+    size = np.linalg.norm(left, axis=0) * np.linalg.norm(right, axis=0)
+    with np.errstate(divide="ignore"):
+        kappa = np.minimum(size / overlap, 1.0 / math.sqrt(eps))
+    return lam, eps * np.linalg.norm(a_b, 1) * kappa
+
+
 def require_stable(sys: control.StateSpace, what: str = "closed-loop axis") -> None:
     """Raise :class:`UnstableLoopError` naming the unstable poles if ``sys`` is unstable.
 
-    A pole counts as unstable when its real part exceeds ``1e-9 max(1, max |p|)`` [rad/s]:
-    poles at the origin and on the imaginary axis (the rigid-body mode of an uncontrolled
-    axis) are accepted.
+    A pole p counts as unstable when its real part exceeds what rounding of the system's
+    matrix could give it, measured against the pole itself:
+
+    ``Re p > 1e-9 |p| + 10 eps ||A_b|| kappa_p``
+
+    with A_b the balanced state matrix and ``kappa_p`` the condition number of p (capped at
+    ``1/sqrt(eps)``). A fast stable mode does not widen the tolerance of a slow pole, so a
+    slowly diverging pole next to fast modes is found; poles on the imaginary axis (undamped
+    modes) and at the origin (the rigid-body mode of an uncontrolled axis, an integrator),
+    whose computed real parts are rounding only, are accepted.
 
     Parameters
     ----------
@@ -945,10 +989,32 @@ def require_stable(sys: control.StateSpace, what: str = "closed-loop axis") -> N
     ------
     UnstableLoopError
         If a pole lies in the right half plane (the message lists up to four of them).
+
+    Notes
+    -----
+    An eigenvalue of a matrix perturbed by E moves by about ``kappa ||E||``; the eigenvalue
+    solver's backward error is a small multiple of ``eps ||A_b||`` (Golub and Van Loan,
+    *Matrix Computations*, 4th ed., sec. 7.2.2). A double pole at the origin (a free mass) is
+    defective: rounding splits it into a pair ``+-d`` along the real axis, and its condition
+    number is large in proportion, so the pair is accepted. The factor 10 covers the data
+    of a reduced structure, whose rigid-body mode is singular only to rounding.
+
+    Examples
+    --------
+    A pole at -1e6 rad/s does not hide one at +1e-4 rad/s:
+
+    >>> fast_and_slow = control.ss(np.diag([-1e6, 1e-4]), np.ones((2, 1)), np.ones((1, 2)), 0)
+    >>> try:
+    ...     require_stable(fast_and_slow)
+    ... except UnstableLoopError as err:
+    ...     print(str(err).split(";")[0])
+    the closed-loop axis is unstable: 1 pole(s) in the right half plane (0.0001+0j rad/s)
     """
-    poles = closed_loop_poles(sys)
-    scale = max(float(np.abs(poles.poles).max(initial=0.0)), 1.0)
-    bad = poles.poles[poles.poles.real > 1e-9 * scale]
+    sys = control.ss(sys)
+    a = np.asarray(sys.A, dtype=float).reshape(sys.nstates, sys.nstates)
+    lam, resolution = _pole_resolution(a)
+    bad = lam[lam.real > 1e-9 * np.abs(lam) + 10.0 * resolution]
+    bad = bad[np.argsort(np.abs(bad))]
     if bad.size:
         listed = ", ".join(f"{p.real:.3g}{p.imag:+.3g}j" for p in bad[:4])
         raise UnstableLoopError(
