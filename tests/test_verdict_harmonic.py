@@ -24,8 +24,9 @@ def starter(tmp_path_factory):
 
 def test_the_scan_agrees_with_the_time_simulated_sweep_at_a_simulated_level(starter):
     # two methods for one peak: the steady periodic response (harmonic balance) and the LuGre
-    # time simulation of the verdict's slow sweep at the same force; a sweep, even a slow one,
-    # lags the steady state a little, hence 3 %
+    # time simulation of the verdict's sweep at the same force; a sweep passes the resonance
+    # before the response has built up to its steady amplitude, so it reads the peak lower
+    # (here by about 6 %), not higher
     from servotune.verdict import nonlinear_verdict
 
     axis, result = starter
@@ -34,15 +35,16 @@ def test_the_scan_agrees_with_the_time_simulated_sweep_at_a_simulated_level(star
     sweep = next(s for s in standing.simulations if s.kind == "sweep")
     (scan,) = standing.harmonic
     assert scan.force_pp == 268.0
-    assert scan.peak == pytest.approx(sweep.peak, rel=0.03)
-    assert scan.resonance_hz == pytest.approx(sweep.resonance_hz, rel=0.02)
+    assert 0.9 * scan.peak <= sweep.peak <= 1.01 * scan.peak
+    # and, sweeping up, it shows the peak late: at a slightly higher frequency (here 2.7 %)
+    assert scan.resonance_hz <= sweep.resonance_hz <= 1.04 * scan.resonance_hz
     assert any("harmonic balance" in line for line in verdict.checked)
 
 
 def test_a_peak_above_the_claim_at_a_level_not_simulated_fails_the_regime(starter, monkeypatch):
-    # the scan is the only witness between the simulated levels: a periodic response above
-    # the claim there must fail the regime, naming the level; one at a simulated level is left
-    # to the time simulation
+    # a periodic response above the claim fails the regime, naming the level, whether the
+    # time simulation ran at that level or not (between the levels the scan is the only
+    # witness)
     from servotune import verdict as v
 
     axis, result = starter
@@ -57,7 +59,8 @@ def test_a_peak_above_the_claim_at_a_level_not_simulated_fails_the_regime(starte
     monkeypatch.setattr(v, "harmonic_scan", scan_high_above_the_lowest_level)
     judged = v.nonlinear_verdict(axis, result, forces=(268.0, 500.0), speeds=[],
                                  simulate_before=False)
-    assert judged.regimes[0].holds, judged.regimes[0].reason   # 500 N was simulated
+    assert not judged.regimes[0].holds       # the steady response judges a simulated level too
+    assert "a level also simulated" in judged.regimes[0].reason
     monkeypatch.setattr(v, "FORCE_LEVELS", (1.0,))
     monkeypatch.setattr(v, "SCAN_LEVELS", (1.0, 2.0))
     wider = v.nonlinear_verdict(axis, result, speeds=[], simulate_before=False)
