@@ -4,7 +4,7 @@ Task: the work-piece compliance of the bundled axis (``models/paper_x_axis``, th
 continuous drive, LuGre at the four pads) over 10-100 Hz at one force level (default 600 N peak
 to peak, standing still).
 
-* servotune: :func:`servotune.harmonic.nonlinear_compliance` (9 harmonics, 128 AFT samples,
+* servotune: :func:`servotune.harmonic.nonlinear_compliance` (9 harmonics, 64 AFT samples,
   arc-length continuation with the peak refined), the best of ``--repeat`` (5) calls after one
   warm-up call (numba's kernels loaded from its cache).
 * baseline: the same curve by the time simulation (:func:`servotune.simulate.simulate`) as a

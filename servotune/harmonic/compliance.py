@@ -374,7 +374,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     band : (float, float)
         Frequency band [rad/s], ``0 < start < end`` (default 10-100 Hz, the paper's sweep).
     settings : HarmonicSettings, optional
-        Harmonics, AFT samples, tolerance (default 9 harmonics, 128 samples); the
+        Harmonics, AFT samples, tolerance (default 9 harmonics, 64 samples); the
         describing-function curves take H = 1 with the default samples for it (32).
     continuation : ContinuationSettings, optional
         Step control of the continuation.
