@@ -31,28 +31,37 @@ def test_init_writes_a_loadable_axis_and_refuses_to_overwrite(tmp_path, capsys):
 
 
 def test_whole_path_on_a_small_axis(starter, tmp_path, capsys):
-    # init -> tune (with the nonlinear verdict) -> results.json + report.html
+    # init -> tune (with the nonlinear verdict) -> results.json + report.html. The starter's
+    # tuned design holds its linear checks and every simulated sweep, but while feeding at
+    # 20 mm/s with 3 x the process force the pads reverse and slip each cycle near 147 Hz: the
+    # periodic response peaks about 56 % above the sliding model's claim (a resonance with
+    # turning points the sweep passes through); the verdict says so and the command exits 1.
+    # tests/test_verdict_harmonic.py confirms that peak by a stepped sine.
     out = tmp_path / "report"
     assert main(["tune", str(starter), "--out", str(out), "--starts", "2", "--workers", "1",
-                 "--json"]) == 0
+                 "--json"]) == 1
     result = json.loads(capsys.readouterr().out)
-    assert result["verified"] is True and result["status"] == "verified"
+    assert result["verified"] is False and result["status"] == "not verified"
     folder = out / f"tune_{result['axis_name']}"
     saved = json.loads((folder / "results.json").read_text())
     assert saved["design"] == result["design"]
-    # the claim of every regime is the worst of its models in the dense check, and the
-    # nonlinear axis holds it within the tolerance
+    # the claim of every regime is the worst of its models in the dense check; every sweep
+    # holds it within the tolerance, decays and sees its peak inside the band
     models = result["performance_after"]["models"]
     for regime in result["regimes"]:
         mine = [m["peak_compliance"] for m in models if m["regime"] == regime["name"]]
         assert regime["claimed_peak_m_per_n"] == max(mine)
-        assert regime["holds"] is True, regime["reason"]
         assert regime["nonlinear_peak_after_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]
         sweeps = [s for s in regime["simulations"] if s["kind"] == "sweep"]
         assert sweeps and all(not s["at_edge"] and s["decays"] for s in sweeps)
+    failing = [r for r in result["regimes"] if not r["holds"]]
+    assert [r["name"] for r in failing] == ["feeding 20 mm/s"]
+    assert "harmonic balance finds" in failing[0]["reason"]
+    worst = max(failing[0]["harmonic_balance"], key=lambda h: h["peak_m_per_n"])
+    assert worst["peak_m_per_n"] > 1.3 * failing[0]["claimed_peak_m_per_n"]
     assert result["peak_compliance_after"] == max(r["claimed_peak_m_per_n"]
                                                   for r in result["regimes"])
-    # the thrust budget holds, and the hierarchy of the loops
+    # the linear checks hold: the thrust budget and the hierarchy of the loops
     assert all(case["fits"] for case in result["thrust"]["cases"])
     assert all(c["holds"] for c in result["checks"])
     page = (folder / "report.html").read_text()

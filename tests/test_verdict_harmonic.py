@@ -68,3 +68,34 @@ def test_a_peak_above_the_claim_at_a_level_not_simulated_fails_the_regime(starte
     assert not standing.holds and not wider.verified
     assert "harmonic balance finds" in standing.reason
     assert "a level not simulated" in standing.reason
+
+
+def test_a_nonlinear_resonance_the_sweeps_miss_is_real_by_a_stepped_sine(tmp_path):
+    # The starter axis tuned (as the design job does with 2 starts), feeding at 20 mm/s with
+    # 805 N p-p (3 x its process force): the pads reverse and slip each cycle and the axis
+    # resonates near 147 Hz well above the sliding model's claim, on a branch with turning
+    # points (the arc-length continuation goes back in frequency twice). The reference: the
+    # LuGre time simulation at the peak frequency, run from rest to a steady fundamental.
+    import numpy as np
+
+    from servotune.design import tuning_problem
+    from servotune.harmonic import nonlinear_compliance
+    from servotune.harmonic.stepped import stepped_sine
+    from servotune.simulate.setup import AxisSetup
+    from servotune.template import write_template
+    from servotune.verdict import design_axis
+
+    write_template(tmp_path)
+    axis = load_axis(tmp_path)
+    problem = tuning_problem(axis)
+    design = Design(c=5578.0, kv=45.3155, kp=3.02830, ti=0.0105404)   # tuned, 2 starts
+    nl = design_axis(axis, problem, design)
+    setup = AxisSetup("starter", nl.structure, nl.drive, tuple(nl.pads), nl.friction.params,
+                      float(nl.friction.params.sigma2))
+    curve = nonlinear_compliance(setup, [805.1], speed=0.02, band=(2 * np.pi * 100,
+                                                                   2 * np.pi * 200),
+                                 references=False, describing=False).curves[0]
+    assert 145.0 < curve.resonance / (2 * np.pi) < 150.0
+    assert np.any(np.diff(curve.omega) < 0)          # turning points followed
+    steady = stepped_sine(setup, 805.1, [curve.resonance], speed=0.02)
+    assert steady.compliance[0] == pytest.approx(curve.peak, rel=0.01)
