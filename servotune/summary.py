@@ -377,7 +377,7 @@ def text(table: Table | None, widths=None) -> str:
     if table is None:
         return ""
     cols = len(table.head)
-    rows = [table.head] + list(table.rows)
+    rows = [table.head, *table.rows]
     widths = widths or [max(len(str(r[i])) for r in rows) for i in range(cols)]
     out = [f"  {table.title}"]
     for k, row in enumerate(rows):

@@ -88,7 +88,7 @@ def test_linear_axis_matches_a_tight_scipy_solution():
                     atol=1e-16, t_eval=[0.1, 0.2])
     r = simulate(axis, sc, step=2.5e-4, record_step=5e-4)
     for k, t in enumerate((0.1, 0.2)):
-        i = int(round(t / 5e-4))
+        i = round(t / 5e-4)
         ref = ode.outputs(t, sol.y[:, k])
         assert_allclose(r["wp_x"][i], ref[ode.output_names.index("wp_x")], rtol=1e-6)
     # the works: trapezoidal quadrature of the powers, error h^2/12 times the change of their
