@@ -1,14 +1,14 @@
 """The HTML report of a real run, opened in headless Chromium.
 
 ``servotune init`` writes the starter axis, ``servotune tune`` tunes it, simulates the design on
-the nonlinear axis and writes its report; Chromium (Debian's ``chromium`` and ``chromium-
-driver``, installed by ``make test``), driven through selenium and chromedriver, loads the page
-from disk. Checked: the page has images, every one of them decodes
+the nonlinear axis and writes its report; Chromium (Debian's ``chromium`` and
+``chromium-driver``, installed by ``make test``), driven through selenium and chromedriver,
+loads the page from disk. Checked: the page has images, every one of them decodes
 (``HTMLImageElement.decode()`` resolves and the natural size is not zero), and the browser's
-console has no error. A full-page screenshot is kept as a test artefact in ``out/test-
-artefacts/report.png``. The report is found through the ``report`` key of the command's JSON (or
-as the one ``report.html`` under ``--out``), so the test keeps working when the report or its
-folder change.
+console has no error. A full-page screenshot is kept as a test artefact in
+``out/test-artefacts/report.png``. The report is found through the ``report`` key of the
+command's JSON (or as the one ``report.html`` under ``--out``), so the test keeps working when
+the report or its folder change.
 """
 
 from __future__ import annotations
