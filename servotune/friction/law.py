@@ -33,14 +33,12 @@ response), Eq 2.3-7.
 
 from __future__ import annotations
 
-import importlib
 import math
-import pkgutil
-import sys
 
 import control
 import numpy as np
 
+from ..plugins import import_modules
 from ..structure.model import signal_name
 
 __all__ = ["FrictionLaw", "friction_law", "friction_law_names", "friction_laws",
@@ -373,11 +371,7 @@ class FrictionLaw:
 def _discover() -> None:
     """Import the laws package and any module of it not imported yet (a module added to the
     package's folders since is found too)."""
-    package = importlib.import_module(LAWS_PACKAGE)
-    for info in pkgutil.iter_modules(package.__path__):
-        name = f"{LAWS_PACKAGE}.{info.name}"
-        if not info.name.startswith("_") and name not in sys.modules:
-            importlib.import_module(name)
+    import_modules(LAWS_PACKAGE)
 
 
 def friction_laws() -> dict[str, type]:

@@ -25,10 +25,10 @@ of an axis) or, for a requirement added as a module, class attributes of its own
 
 from __future__ import annotations
 
-import importlib
 import inspect
-import pkgutil
 from dataclasses import dataclass
+
+from ..plugins import import_modules
 
 __all__ = ["Requirement", "RequirementCheck", "LoopQuantities", "requirements",
            "REQUIREMENTS_PACKAGE", "CHECK_TOLERANCE"]
@@ -302,10 +302,7 @@ def requirements(problem=None) -> tuple[type, ...]:
     tuple of type
         :class:`Requirement` subclasses, sorted by ``order``.
     """
-    package = importlib.import_module(REQUIREMENTS_PACKAGE)
-    for info in pkgutil.iter_modules(package.__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{REQUIREMENTS_PACKAGE}.{info.name}")
+    import_modules(REQUIREMENTS_PACKAGE)
     found = sorted(_REGISTRY.values(), key=lambda c: (c.order, c.name))
     if problem is None:
         return tuple(found)
