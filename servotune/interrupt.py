@@ -32,6 +32,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Iterator
 
 __all__ = ["Interrupted", "handling", "requested", "check", "clear", "restore_stderr",
@@ -184,6 +185,11 @@ def process_pool(workers: int) -> Iterator[object]:
                 if process.is_alive():  # a loaded machine: make sure
                     process.kill()
                     process.join(timeout=2.0)
+        # the executor's own thread may reap a worker at the same time (then this thread's
+        # wait sees no child and the exit code arrives a moment later): wait for every code
+        deadline = time.monotonic() + 5.0
+        while any(p.exitcode is None for p in processes) and time.monotonic() < deadline:
+            time.sleep(0.02)
         raise
     else:
         pool.shutdown(wait=True)
