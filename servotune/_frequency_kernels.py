@@ -12,7 +12,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["pole_terms", "pole_sum", "mode_terms", "solve_batched"]
+__all__ = ["pole_terms", "pole_sum", "mode_terms", "solve_batched", "hessenberg_solve"]
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -108,3 +108,63 @@ def solve_batched(a, b):
             for j in range(c + 1, n):
                 acc -= a[k, c, j] * b[k, j]
             b[k, c] = acc / a[k, c, c]
+
+
+@numba.njit(cache=True)
+def hessenberg_solve(h, omega, rhs, out):
+    """Solve ``(j omega_k I - H) x_k = rhs`` for an upper Hessenberg H (n, n), rhs (n, m)
+    complex, x into out (K, n, m).
+
+    Gaussian elimination with partial pivoting, where the pivot candidates of a Hessenberg
+    matrix are the diagonal and the one subdiagonal entry: O(n^2 m) per frequency instead of
+    the O(n^3) of a dense LU (the method of the Hessenberg frequency response: A. J. Laub,
+    "Efficient multivariable frequency response computations", IEEE TAC 26 (1981) 407-408).
+    A singular system gives NaN.
+    """
+    n = h.shape[0]
+    m = rhs.shape[1]
+    w = np.empty((n, n), dtype=np.complex128)
+    x = np.empty((n, m), dtype=np.complex128)
+    for k in range(omega.size):
+        s = 1j * omega[k]
+        for i in range(n):
+            for j in range(max(i - 1, 0), n):
+                w[i, j] = -h[i, j]
+            w[i, i] += s
+            for r in range(m):
+                x[i, r] = rhs[i, r]
+        singular = False
+        for c in range(n - 1):
+            if abs(w[c + 1, c]) > abs(w[c, c]):
+                for j in range(c, n):
+                    tmp = w[c, j]
+                    w[c, j] = w[c + 1, j]
+                    w[c + 1, j] = tmp
+                for r in range(m):
+                    tmp = x[c, r]
+                    x[c, r] = x[c + 1, r]
+                    x[c + 1, r] = tmp
+            if w[c, c] == 0.0:
+                singular = True
+                break
+            f = w[c + 1, c] / w[c, c]
+            if f != 0.0:
+                for j in range(c + 1, n):
+                    w[c + 1, j] -= f * w[c, j]
+                for r in range(m):
+                    x[c + 1, r] -= f * x[c, r]
+        if singular or w[n - 1, n - 1] == 0.0:
+            for i in range(n):
+                for r in range(m):
+                    out[k, i, r] = complex(math.nan, math.nan)
+            continue
+        for i in range(n - 1, -1, -1):
+            inv = 1.0 / w[i, i]
+            for r in range(m):
+                acc = x[i, r]
+                for j in range(i + 1, n):
+                    acc -= w[i, j] * x[j, r]
+                x[i, r] = acc * inv
+        for i in range(n):
+            for r in range(m):
+                out[k, i, r] = x[i, r]

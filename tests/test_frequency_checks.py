@@ -8,6 +8,7 @@ from pathlib import Path
 import control
 import numpy as np
 import pytest
+import scipy.linalg
 from axis_fixtures import PADS, small_axis, small_drive
 from numpy.testing import assert_allclose
 
@@ -17,6 +18,7 @@ from servotune.frequency import (
     closed_loop_poles,
     compliance,
     fast_frequency_response,
+    is_stable,
     modal_receptance,
     port_compliance,
     require_stable,
@@ -172,3 +174,58 @@ def test_a_grid_with_one_point_in_the_band_gives_that_point(axis):
     curve = analysis.uncontrolled_compliance(axis, [1e5], omega=omega)[0]
     assert curve.peak_frequency == omega[1]
     assert curve.peak_compliance == pytest.approx(abs(curve.values[1]), rel=1e-12)
+
+
+def _unstable_by_the_full_check(a: np.ndarray) -> bool:
+    """The criterion of require_stable evaluated with eigenvectors for every matrix (no quick
+    pass by the eigenvalues alone)."""
+    from servotune.frequency import _pole_resolution
+
+    lam, resolution = _pole_resolution(a)
+    return bool((lam.real > 1e-9 * np.abs(lam) + 10.0 * resolution).any())
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_quick_pass_of_require_stable_agrees_with_the_full_check(seed):
+    # poles straddling the imaginary axis by amounts around the rounding tolerance (real parts
+    # from -0.1 to +0.1 of |p| and down to 1e-14 |p|), in a random non-normal basis: the
+    # quick passes (stable by the eigenvalues alone, unstable beyond any rounding) and the
+    # full check are all taken
+    rng = np.random.default_rng(seed)
+    n = 6
+    wn = 10.0 ** rng.uniform(-1, 4, n // 2)
+    re = rng.choice([-1.0, 1.0], n // 2) * wn * 10.0 ** rng.uniform(-14, -1, n // 2)
+    blocks = [np.array([[r, w], [-w, r]]) for r, w in zip(re, wn, strict=True)]
+    d = scipy.linalg.block_diag(*blocks)
+    v = rng.normal(size=(n, n)) + 3 * np.eye(n)
+    a = v @ d @ np.linalg.inv(v)
+    sys = control.ss(a, np.ones((n, 1)), np.ones((1, n)), 0.0)
+    unstable = _unstable_by_the_full_check(a)
+    assert is_stable(sys) is not unstable
+    if unstable:
+        with pytest.raises(UnstableLoopError):
+            require_stable(sys)
+    else:
+        require_stable(sys)
+
+
+@pytest.mark.parametrize("n, m, seed", [(1, 1, 0), (2, 3, 1), (40, 2, 2), (99, 4, 3)])
+def test_the_hessenberg_solves_of_the_check_agree_with_dense_lu(n, m, seed):
+    # C (jw I - A)^-1 B by the Hessenberg form against scipy's dense LU, including a frequency
+    # on an eigenvalue of A (a singular system: NaN, which the check reads as a failed form)
+    from servotune.frequency import _DirectSolves
+
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(n, n)) * 10.0 ** rng.uniform(-3, 3, (n, 1))
+    b, c = rng.normal(size=(n, m)), rng.normal(size=(2, n))
+    omega = np.geomspace(1e-2, 1e3, 17)
+    got = _DirectSolves(a, b, c)(omega)
+    want = np.stack([c @ scipy.linalg.solve(1j * w * np.eye(n) - a, b) for w in omega], axis=-1)
+    cond = max(np.linalg.cond(1j * w * np.eye(n) - a) for w in omega)
+    assert_allclose(got, want, rtol=0, atol=1e3 * cond * np.finfo(float).eps
+                    * np.abs(want).max())
+    singular = np.zeros((2, 2))
+    singular[0, 1] = -3.0
+    singular[1, 0] = 3.0  # eigenvalues +-3j
+    assert np.isnan(_DirectSolves(singular, np.ones((2, 1)), np.ones((1, 2)))(
+        np.array([3.0]))).all()

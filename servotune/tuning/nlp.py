@@ -61,7 +61,7 @@ from .gates import GATE_SAFETY, GATE_SHARPNESS
 from .ports import SymbolicPorts, responses
 from .problem import VARIABLES, Design, TuningProblem
 
-__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "Kernels", "Solver", "Solution",
+__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "ColumnMap", "Kernels", "Solver", "Solution",
            "gate_parameters", "jit_options", "cache_folder"]
 
 
@@ -182,12 +182,87 @@ def _jit_folder() -> str:
     return _JIT_FOLDER[0]
 
 
+class ColumnMap:
+    """A per-frequency kernel ``f(u, d)`` evaluated at one ``u`` over any number of data
+    columns, in chunks of ``chunk`` columns.
+
+    The values are exchanged with casadi through buffers bound once (``Function.buffer``):
+    converting a numpy array of thousands of columns to casadi's matrix type costs about 20
+    times the evaluation itself, and building a map of the kernel costs about 5 us per
+    column, so one map of ``chunk`` columns serves every size (the last chunk padded with
+    copies of its last column). Casadi versions without buffers are called plainly (same
+    values).
+
+    Parameters
+    ----------
+    kernel : casadi.Function
+        A function of (u, one data column) with one output column.
+    chunk : int
+        Columns per evaluation of the mapped kernel.
+    """
+
+    def __init__(self, kernel: ca.Function, chunk: int = 256):
+        self.chunk = int(chunk)
+        self.n_data, self.n_out = kernel.size1_in(1), kernel.size1_out(0)
+        self.function = kernel.map(f"{kernel.name()}_{self.chunk}", "serial", self.chunk,
+                                   [0], [])
+        self._u = np.zeros(kernel.size1_in(0))
+        self._data = np.zeros(self.n_data * self.chunk)
+        self._out = np.zeros(self.n_out * self.chunk)
+        self._run = None
+        if hasattr(self.function, "buffer"):
+            self._buffer, self._run = self.function.buffer()
+            self._buffer.set_arg(0, memoryview(self._u))
+            self._buffer.set_arg(1, memoryview(self._data))
+            self._buffer.set_res(0, memoryview(self._out))
+
+    def __call__(self, u: np.ndarray, data: np.ndarray) -> np.ndarray:
+        """Return the kernel's output at ``u`` for every column of ``data``.
+
+        Parameters
+        ----------
+        u : numpy.ndarray
+            The scaled free variables.
+        data : numpy.ndarray
+            ``(n_data, n)``: one data column per frequency and model.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n_out, n)``.
+        """
+        data = np.asarray(data, dtype=float)
+        if data.ndim != 2 or data.shape[0] != self.n_data:
+            raise ValueError(f"data of shape {data.shape} for a kernel of {self.n_data} data "
+                             "rows")
+        n = data.shape[1]
+        out = np.empty((self.n_out, n))
+        block = self._data.reshape(self.n_data, self.chunk, order="F")
+        result = self._out.reshape(self.n_out, self.chunk, order="F")
+        self._u[:] = u
+        for start in range(0, n, self.chunk):
+            k = min(self.chunk, n - start)
+            block[:, :k] = data[:, start:start + k]
+            block[:, k:] = data[:, start + k - 1:start + k]
+            if self._run is None:
+                result[:] = np.array(self.function(self._u, block))
+            else:
+                self._run()
+                if self._buffer.ret() != 0:
+                    raise RuntimeError(f"casadi could not evaluate {self.function.name()} "
+                                       f"(return code {self._buffer.ret()})")
+            out[:, start:start + k] = result[:, :k]
+        return out
+
+
 class Kernels:
     """The constraint functions at ONE frequency (one data column) as casadi functions of
     (u, data), u = log(x / x0) the scaled free variables, with the Hessians of their
-    multiplier-weighted sums; the NLP maps them over the grid columns."""
+    multiplier-weighted sums; the NLP maps them over the grid columns, :meth:`evaluate`
+    evaluates them numerically."""
 
     def __init__(self, problem: TuningProblem, h0: float, s0: float):
+        self._maps: dict[str, ColumnMap] = {}
         x0 = problem.initial_design()
         free = problem.free
         u = ca.SX.sym("u", len(free))
@@ -237,6 +312,31 @@ class Kernels:
             self.loop_lower += [float(c.lower)] * len(names)
             self.loop_moving_only += [bool(c.moving_only)] * len(names)
         self.loop, self.loop_hessian = self._pair("loop", u, d_loop, ca.vertcat(*rows))
+
+    def evaluate(self, which: str, u: np.ndarray, data: np.ndarray) -> np.ndarray:
+        """Return the band or loop kernel at ``u`` for every column of ``data`` (numerically).
+
+        Parameters
+        ----------
+        which : {"band", "loop"}
+            The kernel.
+        u : numpy.ndarray
+            The scaled free variables.
+        data : numpy.ndarray
+            One data column per frequency and model (:meth:`PortData.rows`).
+
+        Returns
+        -------
+        numpy.ndarray
+            One row per kernel output (:attr:`band_rows` or :attr:`loop_rows`), one column per
+            data column.
+        """
+        kernel = self.band if which == "band" else self.loop
+        if kernel is None:
+            raise ValueError(f"this problem has no {which} kernel")
+        if which not in self._maps:
+            self._maps[which] = ColumnMap(kernel)
+        return self._maps[which](u, data)
 
     @staticmethod
     def _pair(name, u, d, out):
@@ -589,8 +689,7 @@ class Solver:
         numpy.ndarray
             t (the worst peak), t_m per cutting model (both scaled by h0) and q (chatter).
         """
-        cols = band_data.shape[1]
-        band = np.array(self.kernels.band.map(cols)(self.values(design), band_data))
+        band = self.kernels.evaluate("band", self.values(design), band_data)
         out = []
         row = 0
         if self.n_t:

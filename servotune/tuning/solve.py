@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import time
 from dataclasses import dataclass
 
@@ -36,7 +35,7 @@ import numpy as np
 
 from .. import frequency
 from ..drive import current_loop_bandwidth
-from ..plant import UnstableLoopError, build_plant
+from ..plant import build_plant
 from ..units import HZ_PER_RAD_S
 from .nlp import Kernels, Solution, Solver, gate_parameters
 from .ports import ResponseModel, grid, port_data
@@ -131,11 +130,7 @@ def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
             out.append(True)
             continue
         plant = build_plant(problem.structure, drive, model.contact(design.c), problem.pads)
-        try:
-            frequency.require_stable(plant)
-            out.append(True)
-        except UnstableLoopError:
-            out.append(False)
+        out.append(frequency.is_stable(plant))
     return out
 
 
@@ -317,21 +312,13 @@ class _Fine:
         cut = list(self.problem.cutting_models)
         self.band_rows = port_data(self.problem, self.band).rows(models=cut)
         self.loop_data = port_data(self.problem, self.loop)
-        # thousands of independent columns: evaluated by one thread per core this process has
-        threads = max(1, min(4, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-                             else (os.cpu_count() or 1)))
-        self._band = self.kernels.band.map(self.band_rows.shape[1], "thread", threads)
-        self._loop, self._threads = None, threads
 
     def evaluate(self, solver: Solver, design: Design, gates: np.ndarray):
         u = solver.values(design)
-        band = np.array(self._band(u, self.band_rows))
+        band = self.kernels.evaluate("band", u, self.band_rows)
         loop = None
         if self.kernels.loop is not None:
-            rows = self.loop_data.rows(gates)
-            if self._loop is None:
-                self._loop = self.kernels.loop.map(rows.shape[1], "thread", self._threads)
-            loop = np.array(self._loop(u, rows))
+            loop = self.kernels.evaluate("loop", u, self.loop_data.rows(gates))
         return band, loop
 
 
@@ -343,7 +330,7 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
     n_cut, n_models = len(problem.cutting_models), len(problem.regimes)
     fb, fl = fine.evaluate(solver, design, grids.gates)
     u = solver.values(design)
-    gb = np.array(kernels.band.map(grids.band_rows.shape[1])(u, grids.band_rows))
+    gb = kernels.evaluate("band", u, grids.band_rows)
     kb, kg = fine.band.size, grids.band.size
     band_cands = {}
     for r, row in enumerate(kernels.band_rows):
@@ -354,7 +341,7 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
     worst = 0.0
     if add_band:
         exact = port_data(problem, np.array(add_band)).rows(models=list(problem.cutting_models))
-        ev = np.array(kernels.band.map(exact.shape[1])(u, exact))
+        ev = kernels.evaluate("band", u, exact)
         ka = len(add_band)
         for r, row in enumerate(kernels.band_rows):
             for m in range(n_cut):
@@ -377,7 +364,7 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
         add_loop = sorted(cands)
         if add_loop:
             exact = port_data(problem, np.array(add_loop)).rows(grids.gates)
-            ev = np.array(kernels.loop.map(exact.shape[1])(u, exact))
+            ev = kernels.evaluate("loop", u, exact)
             for r in range(len(kernels.loop_rows)):
                 lo = kernels.loop_lower[r]
                 worst = max(worst, -(ev[r] - lo).min() / max(lo, 1.0))
