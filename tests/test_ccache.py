@@ -1,4 +1,4 @@
-"""The compiler front end that keeps compiled tuning kernels (servotune/tuning/_ccache.py)."""
+"""The tuning kernels compiled to C as one cached shared library (servotune/tuning/_clib.py)."""
 
 from __future__ import annotations
 
@@ -9,83 +9,43 @@ import subprocess
 import sys
 from pathlib import Path
 
+import casadi as ca
+import numpy as np
 import pytest
+from axis_fixtures import PADS, small_axis, small_drive
+from numpy.testing import assert_allclose
 
-SCRIPT = Path(__file__).resolve().parents[1] / "servotune" / "tuning" / "_ccache.py"
+from servotune.tuning import Requirements, TuningProblem, _clib
 
-
-@pytest.fixture
-def counting_compiler(tmp_path):
-    """A 'compiler' that writes its source's bytes, reversed, as the object and counts calls."""
-    if shutil.which("sh") is None:
-        pytest.skip("needs a POSIX shell")
-    script = tmp_path / "fakecc"
-    script.write_text('#!/bin/sh\n'
-                      'echo x >> "$(dirname "$0")/calls"\n'
-                      'while [ $# -gt 0 ]; do case "$1" in\n'
-                      '  -o) out="$2"; shift 2;;\n'
-                      '  *.c) src="$1"; shift;;\n'
-                      '  *) shift;;\n'
-                      'esac; done\n'
-                      'rev "$src" > "$out"\n')
-    script.chmod(script.stat().st_mode | stat.S_IEXEC)
-    return script
+TESTS = Path(__file__).parent
 
 
-def _compile(cache, compiler, source, out, *flags):
-    return subprocess.run([sys.executable, "-S", str(SCRIPT), str(cache), str(compiler),
-                           *flags, "-fPIC", "-c", str(source), "-o", str(out)],
-                          capture_output=True, text=True, check=False)
+def _counting_cc(tmp_path):
+    real = shutil.which("cc") or shutil.which("gcc")
+    if real is None or shutil.which("sh") is None:
+        pytest.skip("needs a C compiler and a POSIX shell")
+    cc = tmp_path / "cc"
+    cc.write_text('#!/bin/sh\n'
+                  'echo c >> "$(dirname "$0")/compiles"\n'
+                  f'exec "{real}" "$@"\n')
+    cc.chmod(cc.stat().st_mode | stat.S_IEXEC)
+    return cc
 
 
-def _calls(compiler):
-    calls = compiler.parent / "calls"
-    return len(calls.read_text().split()) if calls.exists() else 0
+def _compiles(tmp_path) -> int:
+    f = tmp_path / "compiles"
+    return len(f.read_text().split()) if f.exists() else 0
 
 
-def test_the_second_compilation_of_the_same_source_is_a_copy(tmp_path, counting_compiler):
-    cache = tmp_path / "cache"
-    src = tmp_path / "a" / "jit_tmp1.c"
-    src.parent.mkdir()
-    src.write_text("int f(void) { return 1; }\n")
-    first = _compile(cache, counting_compiler, src, tmp_path / "one.o", "-O1")
-    assert first.returncode == 0, first.stderr
-    # another temporary name, same bytes: taken from the cache, the compiler is not called
-    other = tmp_path / "b" / "jit_tmp2.c"
-    other.parent.mkdir()
-    other.write_text(src.read_text())
-    second = _compile(cache, counting_compiler, other, tmp_path / "two.o", "-O1")
-    assert second.returncode == 0, second.stderr
-    assert _calls(counting_compiler) == 1
-    assert (tmp_path / "two.o").read_bytes() == (tmp_path / "one.o").read_bytes()
-    # other flags or other source bytes compile anew
-    _compile(cache, counting_compiler, other, tmp_path / "three.o", "-O2")
-    other.write_text("int f(void) { return 2; }\n")
-    _compile(cache, counting_compiler, other, tmp_path / "four.o", "-O1")
-    assert _calls(counting_compiler) == 3
-    assert len(list(cache.glob("*.o"))) == 3 and not list(cache.glob("*.tmp"))
-
-
-def test_a_failed_compilation_is_not_kept(tmp_path):
-    cache = tmp_path / "cache"
-    src = tmp_path / "bad.c"
-    src.write_text("int f(void) { return 1; }\n")
-    result = _compile(cache, shutil.which("false") or "/bin/false", src, tmp_path / "bad.o")
-    assert result.returncode != 0
-    assert not cache.exists() or not list(cache.iterdir())
+def _problem():
+    return TuningProblem(small_axis(), PADS, c=5e4, drive=small_drive(), free=("c", "kp"),
+                         requirements=Requirements())
 
 
 def test_the_tuning_kernels_compile_once_per_problem(tmp_path):
-    # the same problem in two processes: the second compiles nothing (it only links the
-    # objects the first left in the cache) and evaluates the kernels to the same numbers
-    real = shutil.which("cc") or shutil.which("gcc")
-    if real is None:
-        pytest.skip("needs a C compiler")
-    cc = tmp_path / "cc"
-    cc.write_text('#!/bin/sh\n'
-                  'case " $* " in *" -c "*) echo c >> "$(dirname "$0")/compiles";; esac\n'
-                  f'exec "{real}" "$@"\n')
-    cc.chmod(cc.stat().st_mode | stat.S_IEXEC)
+    # the same problem in two processes: the second compiles nothing (it loads the library
+    # the first left in the cache) and evaluates the kernels to the same numbers
+    cc = _counting_cc(tmp_path)
     code = ("import numpy as np\n"
             "from axis_fixtures import PADS, small_axis, small_drive\n"
             "from servotune.tuning import Requirements, TuningProblem\n"
@@ -93,18 +53,81 @@ def test_the_tuning_kernels_compile_once_per_problem(tmp_path):
             "p = TuningProblem(small_axis(), PADS, c=5e4, drive=small_drive(),\n"
             "                  free=('c', 'kp'), requirements=Requirements())\n"
             "k = Kernels(p, 1e-7, 1e-7)\n"
+            "print(k.band.class_name())\n"
             "print(repr(float(k.band(np.zeros(2), np.ones(k.band.size1_in(1)))[0])))\n")
     env = {**os.environ, "SERVOTUNE_CACHE": str(tmp_path / "c"), "CC": str(cc),
-           "SERVOTUNE_JIT": "1", "PYTHONPATH": str(Path(__file__).parent)}
-    compiles = tmp_path / "compiles"
+           "SERVOTUNE_JIT": "1", "PYTHONPATH": str(TESTS)}
     outputs = []
-    for expected in (True, False):
-        before = len(compiles.read_text().split()) if compiles.exists() else 0
+    for expected in (1, 0):
+        before = _compiles(tmp_path)
         r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                            text=True, check=False)
         assert r.returncode == 0, r.stderr
-        after = len(compiles.read_text().split()) if compiles.exists() else 0
-        assert (after > before) == expected
+        assert _compiles(tmp_path) - before == expected
         outputs.append(r.stdout)
     assert outputs[0] == outputs[1]
-    assert list((tmp_path / "c" / "casadi").glob("*.o"))
+    assert outputs[0].startswith("External")
+    assert len(list((tmp_path / "c" / "casadi").glob("kernels-*.so"))) == 1
+
+
+def _kernel_values(kernels, problem):
+    """The kernels, their Hessians and casadi's Jacobian of the mapped kernels (through the
+    compiled derivative functions when compiled) at a few points."""
+    rng = np.random.default_rng(3)
+    nf = len(problem.free)
+    out = []
+    for name in ("band", "loop"):
+        f, hess = getattr(kernels, name), getattr(kernels, f"{name}_hessian")
+        data = rng.uniform(0.5, 1.5, (f.size1_in(1), 5))
+        u = ca.MX.sym("u", nf)
+        mapped = f.map(5)(u, data)
+        jac = ca.Function("j", [u], [ca.jacobian(ca.vec(mapped), u)])
+        for u0 in (np.zeros(nf), rng.normal(scale=0.3, size=nf)):
+            out.append(np.array(f.map(5)(u0, data)))
+            out.append(np.array(jac(u0)))
+            lam = rng.normal(size=f.size1_out(0))
+            out.append(np.array(hess(u0, data[:, 0], lam)))
+    return out
+
+
+def test_the_compiled_kernels_and_their_derivatives_equal_the_interpreted_ones(tmp_path,
+                                                                              monkeypatch):
+    from servotune.tuning.nlp import Kernels
+
+    if _clib.compiler() is None:
+        pytest.skip("needs a C compiler")
+    monkeypatch.setenv("SERVOTUNE_CACHE", str(tmp_path / "c"))
+    problem = _problem()
+    compiled = Kernels(problem, 1e-7, 1e-7)
+    assert compiled.band.class_name() == "External"
+    monkeypatch.setenv("SERVOTUNE_JIT", "0")
+    interpreted = Kernels(problem, 1e-7, 1e-7)
+    assert interpreted.band.class_name() == "SXFunction"
+    for got, want in zip(_kernel_values(compiled, problem), _kernel_values(interpreted, problem),
+                         strict=True):
+        assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_a_failed_compilation_warns_and_leaves_the_kernels_interpreted(tmp_path, monkeypatch):
+    false = shutil.which("false")
+    if false is None:
+        pytest.skip("needs /bin/false")
+    monkeypatch.setenv("SERVOTUNE_CACHE", str(tmp_path / "c"))
+    monkeypatch.setenv("CC", false)
+    monkeypatch.setenv("SERVOTUNE_JIT", "1")
+    x = ca.SX.sym("x")
+    f = ca.Function("twice", [x], [2 * x])
+    with pytest.warns(RuntimeWarning, match="interpreted"):
+        (g,) = _clib.compile_functions([f], {})
+    assert g is f
+    assert not list((tmp_path / "c" / "casadi").iterdir())  # no half-written library
+
+
+def test_the_cache_keeps_the_most_recently_used_libraries(tmp_path):
+    for i in range(_clib.KEEP + 3):
+        p = tmp_path / f"kernels-{i}.so"
+        p.write_bytes(b"x")
+        os.utime(p, (1000 + i, 1000 + i))
+    _clib._prune(str(tmp_path))
+    kept = sorted(int(p.stem.split("-")[1]) for p in tmp_path.glob("*.so"))
+    assert kept == list(range(3, _clib.KEEP + 3))

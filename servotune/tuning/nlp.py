@@ -56,13 +56,14 @@ import casadi as ca
 import numpy as np
 
 from .. import interrupt
+from ._clib import cache_folder
 from .constraint import LoopQuantities, requirements
 from .gates import GATE_SAFETY, GATE_SHARPNESS
 from .ports import SymbolicPorts, responses
 from .problem import VARIABLES, Design, TuningProblem
 
 __all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "ColumnMap", "Kernels", "Solver", "Solution",
-           "gate_parameters", "jit_options", "cache_folder"]
+           "gate_parameters", "cache_folder"]
 
 
 def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
@@ -93,93 +94,6 @@ def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
             row.extend(float(x) for x in c.gate(problem, m, float(gamma[m]), current_bandwidth))
         rows.append(row)
     return np.array(rows, dtype=float).reshape(len(problem.regimes), -1)
-
-
-def jit_options() -> dict:
-    """Return the casadi options that compile the per-frequency kernels to C.
-
-    Compiled kernels run about three times faster than casadi's virtual machine. They are
-    compiled when a C compiler is found (``$CC``, ``cc`` or ``gcc``) and ``SERVOTUNE_JIT`` is
-    not ``0``; else the options are empty (the kernels are interpreted, with the same results).
-
-    The compiled objects are kept in :func:`cache_folder` by the hash of their source
-    (:mod:`servotune.tuning._ccache`), so a second run of the same problem compiles nothing
-    (the first compiles for about a second and a half on the bundled axis).
-
-    Returns
-    -------
-    dict
-        Options for ``casadi.Function`` (empty when the kernels are interpreted).
-    """
-    import os
-    import shutil
-    import sys
-
-    if os.environ.get("SERVOTUNE_JIT", "1") == "0":
-        return {}
-    compiler = next((c for c in (os.environ.get("CC"), "cc", "gcc") if c and shutil.which(c)),
-                    None)
-    if compiler is None:
-        return {}
-    folder = _jit_folder()
-    front = compiler
-    cache = cache_folder()
-    if cache is not None:
-        script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_ccache.py")
-        front = f'"{sys.executable}" -S "{script}" "{cache}" "{shutil.which(compiler)}"'
-    return {"jit": True, "compiler": "shell", "jit_cleanup": False,
-            "jit_options": {"compiler": front, "linker": compiler, "flags": ["-O1"],
-                            "verbose": False, "directory": folder + os.sep,
-                            # the folder goes when the process ends (casadi's own clean-up
-                            # would come after it and warn)
-                            "cleanup": False}}
-
-
-def cache_folder() -> str | None:
-    """The folder of the compiled tuning kernels: ``$SERVOTUNE_CACHE/casadi``, else
-    ``$XDG_CACHE_HOME/servotune/casadi`` or ``~/.cache/servotune/casadi``; None (no cache)
-    when ``SERVOTUNE_CACHE`` is empty or the folder cannot be created.
-
-    Returns
-    -------
-    str or None
-        An absolute path without quotes (it is passed through a shell).
-    """
-    import os
-
-    base = os.environ.get("SERVOTUNE_CACHE")
-    if base == "":
-        return None
-    if base is None:
-        xdg = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"),
-                                                                 ".cache")
-        base = os.path.join(xdg, "servotune")
-    folder = os.path.abspath(os.path.join(base, "casadi"))
-    if '"' in folder or "$" in folder or "`" in folder:
-        return None
-    try:
-        os.makedirs(folder, exist_ok=True)
-    except OSError:
-        return None
-    return folder if os.access(folder, os.W_OK) else None
-
-
-_JIT_FOLDER: list[str] = []
-
-
-def _jit_folder() -> str:
-    """A temporary folder of this process for the generated C and the compiled objects
-    (casadi writes them into the working folder otherwise, where a killed run leaves them),
-    removed when the process ends."""
-    if not _JIT_FOLDER:
-        import atexit
-        import shutil
-        import tempfile
-
-        folder = tempfile.mkdtemp(prefix="servotune-jit-")
-        atexit.register(shutil.rmtree, folder, True)
-        _JIT_FOLDER.append(folder)
-    return _JIT_FOLDER[0]
 
 
 class ColumnMap:
@@ -283,8 +197,24 @@ class Kernels:
             ["chatter"] if w_chatter > 0 else [])
         self.loop = self.loop_hessian = None
         self.loop_rows, self.loop_lower, self.loop_moving_only = [], [], []
-        if problem.drive is None:
-            return
+        if problem.drive is not None:
+            self._loop_kernels(problem, u, values)
+        self._compile(len(free))
+
+    def _compile(self, n_free: int) -> None:
+        """The kernels compiled to C (one library: :mod:`servotune.tuning._clib`), with the
+        forward derivatives in up to ``n_free`` directions the constraint Jacobian takes."""
+        from ._clib import compile_functions
+
+        names = ("band", "band_hessian", "loop", "loop_hessian")
+        present = [n for n in names if getattr(self, n) is not None]
+        compiled = compile_functions([getattr(self, n) for n in present],
+                                     {"band": n_free, "loop": n_free})
+        for name, f in zip(present, compiled, strict=True):
+            setattr(self, name, f)
+
+    def _loop_kernels(self, problem: TuningProblem, u, values) -> None:
+        """The loop kernel of the requirements' rows and its Hessian."""
         # the loop rows: each requirement's, in their order (servotune.tuning.requirements)
         loop_requirements = [c for c in requirements(problem) if c.row_names(problem)]
         n_gate = sum(c.gate_size for c in requirements(problem))
@@ -328,7 +258,7 @@ class Kernels:
         Returns
         -------
         numpy.ndarray
-            One row per kernel output (:attr:`band_rows` or :attr:`loop_rows`), one column per
+            One row per kernel output (``band_rows`` or ``loop_rows``), one column per
             data column.
         """
         kernel = self.band if which == "band" else self.loop
@@ -340,13 +270,11 @@ class Kernels:
 
     @staticmethod
     def _pair(name, u, d, out):
-        """The function and the Hessian in u of its outputs weighted by multipliers (compiled
-        to C when a compiler is at hand: see :func:`jit_options`)."""
+        """The function and the Hessian in u of its outputs weighted by multipliers."""
         lam = ca.SX.sym("lam", out.numel())
         hessian = ca.hessian(ca.dot(lam, out), u)[0]
-        opts = jit_options()
-        return (ca.Function(name, [u, d], [out], opts),
-                ca.Function(f"{name}_hessian", [u, d, lam], [ca.densify(hessian)], opts))
+        return (ca.Function(name, [u, d], [out]),
+                ca.Function(f"{name}_hessian", [u, d, lam], [ca.densify(hessian)]))
 
 
 class _IterationLimit:
