@@ -53,6 +53,7 @@ __all__ = [
     "closed_loop_poles",
     "require_stable",
     "is_stable",
+    "is_stable_matrix",
     "following_error",
     "peak",
 ]
@@ -1006,6 +1007,25 @@ def _stable(a: np.ndarray) -> bool:
         return False
     lam, resolution = _pole_resolution(a)
     return not (lam.real > 1e-9 * np.abs(lam) + 10.0 * resolution).any()
+
+
+def is_stable_matrix(a: np.ndarray) -> bool:
+    """Return whether the state matrix ``a`` is stable in the sense of :func:`require_stable`.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        The state matrix (n, n).
+
+    Returns
+    -------
+    bool
+        False when a pole lies in the right half plane beyond what rounding could put there.
+    """
+    a = np.asarray(a, dtype=float)
+    if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        raise ValueError(f"a state matrix must be square, got shape {a.shape}")
+    return _stable(a)
 
 
 def is_stable(sys: control.StateSpace) -> bool:

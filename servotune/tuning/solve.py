@@ -30,6 +30,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -49,7 +50,8 @@ from .problem import (
 from .verify import Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = ["TuningResult", "TuningStatistics", "Prediction", "StartSet", "StartsOutcome",
-           "ExchangeOutcome", "stable_starts", "model_stability", "solve_starts",
+           "ExchangeOutcome", "ClosedLoopMatrices", "stable_starts", "model_stability",
+           "solve_starts",
            "exchange_grids", "predict", "tune"]
 
 #: Softer velocity loops tried when the initial design leaves a model unstable.
@@ -111,6 +113,10 @@ class TuningResult:
 def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
     """Return the closed-loop stability of a design in each regime model (state-space poles).
 
+    The criterion is :func:`servotune.frequency.is_stable` on the closed-loop state matrix of
+    each model, taken from :class:`ClosedLoopMatrices` (exact multi-affine form) when the
+    problem's drive has that form, else from :func:`~servotune.plant.build_plant`.
+
     Parameters
     ----------
     problem : TuningProblem
@@ -123,15 +129,128 @@ def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
     list of bool
         One per regime model: True when every closed-loop pole lies in the left half plane.
     """
-    drive = problem.drive_for(design)
-    out = []
-    for model in problem.regimes:
-        if drive is None:
-            out.append(True)
-            continue
-        plant = build_plant(problem.structure, drive, model.contact(design.c), problem.pads)
-        out.append(frequency.is_stable(plant))
-    return out
+    if problem.drive is None:
+        return [True] * len(problem.regimes)
+    matrices = ClosedLoopMatrices.of(problem)
+    if matrices.exact:
+        return [frequency.is_stable_matrix(a) for a in matrices(design)]
+    return [frequency.is_stable(matrices.build(model, design)) for model in problem.regimes]
+
+
+class ClosedLoopMatrices:
+    """The closed-loop state matrix of each regime model as a function of the design.
+
+    With the cascade of :mod:`servotune.drive` (position P, velocity PI, the current loop
+    fixed) and a contact viscous in C, the matrix is multi-affine in the design::
+
+        A(d) = A_0 + c A_1 + Kv A_2 + Kp A_3 + (Kp / Ti) A_4 + Kp Kv A_5
+
+    The six matrices of each model are solved for from the plants built at six designs around
+    the initial one (C raised, Kv, Kp and Ti each doubled in turn, and Kv and Kp together: a
+    well-conditioned 6 x 6 system in the variables relative to the initial design), and the
+    form is checked at a seventh design against the built plant, entry by entry to 1e-9 of
+    that entry's size over the designs (plus 1e-14 of the largest entry: the rounding of
+    cancellations). A design then costs a sum of six matrices instead of an interconnection
+    of the plant's blocks. When the check fails (a drive whose matrices depend otherwise on
+    the design), ``exact`` is False and each design is built.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        A problem with a drive.
+    """
+
+    _KEPT: ClassVar[dict[int, tuple[object, ClosedLoopMatrices]]] = {}
+
+    def __init__(self, problem: TuningProblem):
+        self.problem = problem
+        x0 = problem.initial_design()
+        self._x0, self._c_ref = x0, x0.c if x0.c > 0 else 1.0
+        fit = [x0,
+               dataclasses.replace(x0, c=x0.c + self._c_ref),
+               dataclasses.replace(x0, kv=2 * x0.kv),
+               dataclasses.replace(x0, kp=2 * x0.kp),
+               dataclasses.replace(x0, ti=2 * x0.ti),
+               dataclasses.replace(x0, kv=2 * x0.kv, kp=2 * x0.kp)]
+        check = dataclasses.replace(x0, c=x0.c + 0.5 * self._c_ref, kv=0.6 * x0.kv,
+                                    kp=2.5 * x0.kp, ti=0.7 * x0.ti)
+        m = np.array([self._monomials(d) for d in fit])
+        self.coefficients, self.exact = [], True
+        for model in problem.regimes:
+            built = np.array([self.build(model, d).A for d in fit])
+            coef = np.linalg.solve(m, built.reshape(len(fit), -1))
+            a = self.build(model, check).A
+            # each entry to 1e-9 of its size, with a floor of 1e-14 of the matrix's largest
+            # entry (entries that are rounding of a cancellation, ~1e-16 of it, carry no form)
+            tol = 1e-9 * np.abs(built).max(axis=0).ravel() + 1e-14 * np.abs(built).max()
+            if a.shape != built.shape[1:] or not np.all(
+                    np.abs(self._monomials(check) @ coef - a.ravel()) <= tol):
+                self.exact = False
+                break
+            self.coefficients.append(coef.reshape((len(fit), *a.shape)))
+
+    @classmethod
+    def of(cls, problem: TuningProblem) -> ClosedLoopMatrices:
+        """Return the matrices of ``problem``, made once per problem object (a few are kept).
+
+        Parameters
+        ----------
+        problem : TuningProblem
+            A problem with a drive.
+
+        Returns
+        -------
+        ClosedLoopMatrices
+        """
+        kept = cls._KEPT.get(id(problem))
+        if kept is not None and kept[0] is problem:
+            return kept[1]
+        out = cls(problem)
+        if len(cls._KEPT) >= 4:
+            cls._KEPT.pop(next(iter(cls._KEPT)))
+        cls._KEPT[id(problem)] = (problem, out)
+        return out
+
+    def _monomials(self, d: Design) -> np.ndarray:
+        x0 = self._x0
+        c, kv, kp, ti = d.c / self._c_ref, d.kv / x0.kv, d.kp / x0.kp, d.ti / x0.ti
+        return np.array([1.0, c, kv, kp, kp / ti, kp * kv])
+
+    def build(self, model, design: Design):
+        """Return the closed-loop plant of one regime model with a design (built).
+
+        Parameters
+        ----------
+        model : RegimeModel
+            The regime model.
+        design : Design
+            The design.
+
+        Returns
+        -------
+        control.StateSpace
+            :func:`~servotune.plant.build_plant` of the model's contact and the design's drive.
+        """
+        p = self.problem
+        return build_plant(p.structure, p.drive_for(design), model.contact(design.c), p.pads)
+
+    def __call__(self, design: Design) -> list[np.ndarray]:
+        """Return the closed-loop state matrix of every regime model with ``design``.
+
+        Parameters
+        ----------
+        design : Design
+            The design.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            One matrix per regime model (built plants' matrices when not ``exact``).
+        """
+        if not self.exact:
+            return [self.build(m, design).A for m in self.problem.regimes]
+        mono = self._monomials(design)
+        return [np.tensordot(mono, coef, axes=1) for coef in self.coefficients]
 
 
 @dataclass(frozen=True)
