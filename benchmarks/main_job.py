@@ -173,9 +173,11 @@ def run_job(axis_path, workers: int, simulate: bool, starts: int, plots: bool) -
         with out.writing() as folder:
             t0 = time.perf_counter()
             paths = []
-            if plots:
-                for file, title, fig in report.tuning_figures(job):
-                    _common.save_figure(fig, folder / file)
+            if plots:  # as the command: rendered by as many processes as it has workers
+                figures = report.tuning_figures(job)
+                rendered = report.render_figures([f for _, _, f in figures], workers=workers)
+                for (file, title, _), data in zip(figures, rendered, strict=True):
+                    (folder / file).write_bytes(data)
                     paths.append((folder / file, title))
             phases["figures"] = time.perf_counter() - t0
             t0 = time.perf_counter()

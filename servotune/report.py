@@ -15,6 +15,7 @@ __all__ = [
     "OutputExistsError",
     "check_writable",
     "default_folder",
+    "render_figures",
     "save_figure",
     "write_atomically",
     "write_json",
@@ -130,6 +131,88 @@ def save_figure(fig, path, force: bool = False, dpi: int = 150) -> Path:
     buffer = io.BytesIO()
     fig.savefig(buffer, format=path.suffix.lstrip(".") or "png", dpi=dpi)
     return write_atomically(path, buffer.getvalue(), force)
+
+
+def render_figures(figures, fmt: str = "png", dpi: int = 150, workers: int = 1) -> list[bytes]:
+    """Render matplotlib figures to file bytes, in up to ``workers`` processes.
+
+    Rendering (text layout, constrained layout, rasterising) takes a few tenths of a second per
+    figure; with ``workers`` > 1 on a system with ``os.fork`` the figures are shared out
+    between this process and forked children (which see the figures in their memory, render
+    their share into a temporary file each and end without running any exit handler). A child
+    that fails has its figures rendered here instead, so the bytes never depend on how they
+    were made.
+
+    Parameters
+    ----------
+    figures : sequence of matplotlib.figure.Figure
+        The figures.
+    fmt : str, optional
+        File format (default ``"png"``).
+    dpi : int, optional
+        Resolution of raster formats [dots per inch] (default 150).
+    workers : int, optional
+        Largest number of processes (this one included; default 1: render here, in turn).
+
+    Returns
+    -------
+    list of bytes
+        The rendered files, in the order of ``figures``.
+    """
+    import io
+
+    figures = list(figures)
+
+    def render(fig) -> bytes:
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format=fmt, dpi=dpi)
+        return buffer.getvalue()
+
+    n = min(int(workers), len(figures))
+    if n < 2 or not hasattr(os, "fork"):
+        return [render(f) for f in figures]
+    # share out by size (axes x plotted points), the largest first, each to the lightest share
+    def size(fig) -> int:
+        return sum(1 + sum(len(line.get_xdata()) for line in ax.get_lines())
+                   for ax in fig.axes)
+
+    shares, load = [[] for _ in range(n)], [0] * n
+    for i in sorted(range(len(figures)), key=lambda i: -size(figures[i])):
+        k = load.index(min(load))
+        shares[k].append(i)
+        load[k] += size(figures[i]) + 5000  # a figure's fixed cost (layout, text)
+    out: list[bytes | None] = [None] * len(figures)
+    children = []
+    with tempfile.TemporaryDirectory(prefix="servotune-figures-") as tmp:
+        try:
+            for k, share in enumerate(shares[1:], start=1):
+                path = os.path.join(tmp, f"share{k}")
+                pid = os.fork()
+                if pid == 0:  # the child: render, write, leave at once
+                    status = 1
+                    try:
+                        with open(path, "wb") as f:
+                            for i in share:
+                                data = render(figures[i])
+                                f.write(len(data).to_bytes(8, "little") + data)
+                        status = 0
+                    finally:
+                        os._exit(status)
+                children.append((pid, share, path))
+            for i in shares[0]:
+                out[i] = render(figures[i])
+        finally:
+            for pid, share, path in children:
+                _, status = os.waitpid(pid, 0)
+                if status == 0:
+                    with open(path, "rb") as f:
+                        for i in share:
+                            length = int.from_bytes(f.read(8), "little")
+                            out[i] = f.read(length)
+    for i, data in enumerate(out):
+        if data is None:  # a child that failed (or was interrupted): rendered here
+            out[i] = render(figures[i])
+    return out
 
 
 def write_json(path, obj, force: bool = False) -> Path:

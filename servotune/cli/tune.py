@@ -28,7 +28,6 @@ from ._common import (
     number,
     print_json,
     require_section,
-    save_figure,
     to_jsonable,
     write_results,
 )
@@ -185,8 +184,11 @@ def run(args) -> int:
     with progress.task(f"writing {out.path}"), out.writing() as folder:
         figures = [] if args.no_plots else report.tuning_figures(job)
         paths = []
-        for file, title, fig in figures:
-            save_figure(fig, folder / file)
+        # rendered in as many processes as the simulations had (each figure takes a few
+        # tenths of a second)
+        rendered = report.render_figures([fig for _, _, fig in figures], workers=workers)
+        for (file, title, _), data in zip(figures, rendered, strict=True):
+            (folder / file).write_bytes(data)
             paths.append((folder / file, title))
         report.write_html_report(job, folder, force=True, figures=paths)
         results["files"] = [str(out.file(p.name)) for p, _ in paths]
