@@ -7,7 +7,7 @@
      modal sum, closed with the contacts and the cascade by one small batched solve per
      frequency (never forms the closed loop);
    * ``fast_frequency_response``: the closed-loop state space in (block) modal form, checked a
-     posteriori by iterative refinement;
+     posteriori against direct solves (Hessenberg form) at a few dozen frequencies;
    * baseline: ``control.frequency_response`` on the same SISO system (SLICOT TB05AD through
      slycot: a Hessenberg form, then O(n^2) per frequency).
 
