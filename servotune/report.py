@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -191,6 +192,10 @@ def render_figures(figures, fmt: str = "png", dpi: int = 150, workers: int = 1) 
                 if pid == 0:  # the child: render, write, leave at once
                     status = 1
                     try:
+                        # own streams: a progress thread of the parent may have held the
+                        # locks of the inherited ones at the fork (its output is not needed:
+                        # a failed share is rendered again in the parent, errors and all)
+                        sys.stdout = sys.stderr = open(os.devnull, "w")
                         with open(path, "wb") as f:
                             for i in share:
                                 data = render(figures[i])
