@@ -22,6 +22,7 @@ import numpy as np
 
 from . import analysis, twomass
 from .axis import Axis
+from .blas import one_thread
 from .frequency import port_compliance
 from .plant import Contact
 from .regimes import RegimeModel, regime_models
@@ -671,6 +672,7 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
 
 
+@one_thread
 def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
     """Return the checks of a given design without tuning.
 
@@ -741,6 +743,7 @@ def _reference_contact(problem, design):
     return model.contact(design.c)
 
 
+@one_thread
 def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
               starts: int = 4, bounds: dict | None = None, seed: int = 0,
               tolerance: float | None = None, simulate: bool = False,

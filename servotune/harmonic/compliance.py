@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..blas import one_thread
 from ..frequency import port_compliance
 from ..friction.lugre import sliding_linearisation
 from ..plant import Contact
@@ -355,6 +356,7 @@ def require_stable_regime(setup, speed: float = 0.0) -> None:
     require_stable(build_plant(setup.structure, setup.drive, contact, setup.pads), what)
 
 
+@one_thread
 def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND,
                          settings: HarmonicSettings | None = None,
                          continuation: ContinuationSettings | None = None, law=None,

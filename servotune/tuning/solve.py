@@ -35,6 +35,7 @@ from typing import ClassVar
 import numpy as np
 
 from .. import frequency
+from ..blas import one_thread
 from ..drive import current_loop_bandwidth
 from ..plant import build_plant
 from ..units import HZ_PER_RAD_S
@@ -787,6 +788,7 @@ def _kept_models(problem: TuningProblem, start_set: StartSet):
     return problem, excluded
 
 
+@one_thread
 def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 30,
          tolerance: float = 1e-6, callback=None) -> TuningResult:
     """Optimise the free design variables with casadi/IPOPT, then verify with python-control.
