@@ -980,11 +980,15 @@ def _operation(data, drive, friction, cutting, requirements, file, defaults
     kwargs["rapid_speed"] = rapid
     feeds = kwargs.get("feed_speeds", ())
     if rapid is not None and feeds and max(feeds) > rapid:
-        where = ("[operation] rapid_speed" if "rapid_speed" in table
-                 else "[drive.motor] speed_max_rpm")
-        raise _err(file, where, f"the rapid speed {rapid:.4g} m/s is below the feed speed "
-                   f"{max(feeds):.4g} m/s", "check the motor's top speed and the feed speeds "
-                   "(m/s)")
+        # name both sources: the rapid speed's and the feed speeds' (given, or derived from
+        # [cutting])
+        rapid_from = ("[operation] rapid_speed" if "rapid_speed" in table
+                      else "[drive.motor] speed_max_rpm x [drive.transmission] ratio")
+        feeds_from = ("[operation] feed_speeds" if "feed_speeds" in table
+                      else "[cutting] feed_per_tooth x teeth x speed_rpm")
+        raise _err(file, rapid_from, f"the rapid speed {rapid:.4g} m/s is below the feed speed "
+                   f"{max(feeds):.4g} m/s of {feeds_from}",
+                   "check the motor's top speed and the feed speeds (m/s)")
     if "acceleration" in table:
         kwargs["acceleration"] = _number(table, "acceleration", file, "operation", low=1e-3,
                                          high=200.0, unit="m/s^2")
