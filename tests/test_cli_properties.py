@@ -91,6 +91,11 @@ FIXED_GAPS = [
     (("drive", "motor", "stator"), ["x"], "a list as a DOF name ends in TypeError"),
     (("drive", "position_loop", "kv_m_per_min_per_mm"), math.inf,
      "the error names Drive.kv, not the field kv_m_per_min_per_mm"),
+    (("cutting", "feed_per_tooth"), 0.0078125,
+     "a feed from [cutting] (6.25 m/s) above the rapid speed named only speed_max_rpm"),
+    (("drive", "transmission", "ratio"), 1e-6,
+     "a rapid speed (top speed x ratio) below the feed named only speed_max_rpm"),
+    (("drive", "motor", "speed_max_rpm"), 1.0, "the same, from the motor's top speed"),
 ]
 
 
@@ -236,24 +241,3 @@ def test_any_result_becomes_strict_json(obj):
     assert json.loads(text)["result"] is not None or obj is None or (
         isinstance(obj, float) and not math.isfinite(obj))
 
-
-def test_a_feed_from_cutting_above_the_rapid_speed_names_the_cutting_fields():
-    # found by the property test above: feed_per_tooth 7.8 mm gives a feed of 6.25 m/s from
-    # [cutting], above the motor's rapid speed; the message named only the motor
-    data = _copy(TEMPLATE)
-    _set(data, ("cutting", "feed_per_tooth"), 0.0078125)
-    with pytest.raises(AxisFormatError) as info:
-        _load(data)
-    message = str(info.value)
-    assert "[cutting] feed_per_tooth" in message and "speed_max_rpm" in message
-
-
-@pytest.mark.parametrize("path, value", [(("drive", "transmission", "ratio"), 1e-6),
-                                         (("drive", "motor", "speed_max_rpm"), 1.0)])
-def test_a_rapid_speed_below_the_feed_names_where_it_comes_from(path, value):
-    # the rapid speed is the motor's top speed times the transmission ratio: either named
-    data = _copy(TEMPLATE)
-    _set(data, path, value)
-    with pytest.raises(AxisFormatError) as info:
-        _load(data)
-    assert _names_the_field(str(info.value), path), str(info.value)
