@@ -188,7 +188,10 @@ def render_figures(figures, fmt: str = "png", dpi: int = 150, workers: int = 1) 
         try:
             for k, share in enumerate(shares[1:], start=1):
                 path = os.path.join(tmp, f"share{k}")
-                pid = os.fork()
+                try:
+                    pid = os.fork()
+                except OSError:  # no process to be had: this share is rendered here
+                    continue
                 if pid == 0:  # the child: render, write, leave at once
                     status = 1
                     try:

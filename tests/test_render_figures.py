@@ -58,3 +58,12 @@ def test_a_failing_child_leaves_its_figures_to_this_process(monkeypatch):
 def test_no_figures_and_one_worker():
     assert report.render_figures([], workers=4) == []
     assert report.render_figures(_figures(1), workers=4) == _serial(1)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs os.fork")
+def test_no_process_to_be_had_renders_everything_here(monkeypatch):
+    def no_fork():
+        raise OSError("Resource temporarily unavailable")
+
+    monkeypatch.setattr(os, "fork", no_fork)
+    assert report.render_figures(_figures(3), workers=3) == _serial(3)
