@@ -131,3 +131,32 @@ def test_the_cache_keeps_the_most_recently_used_libraries(tmp_path):
     _clib._prune(str(tmp_path))
     kept = sorted(int(p.stem.split("-")[1]) for p in tmp_path.glob("*.so"))
     assert kept == list(range(3, _clib.KEEP + 3))
+
+
+def test_a_library_that_does_not_load_warns_and_leaves_the_kernels_interpreted(tmp_path):
+    # a damaged (or foreign) file under the library's name in the cache, met by a new process
+    if _clib.compiler() is None:
+        pytest.skip("needs a C compiler")
+    code = ("import warnings\n"
+            "import casadi as ca\n"
+            "from servotune.tuning import _clib\n"
+            "x = ca.SX.sym('x')\n"
+            "with warnings.catch_warnings(record=True) as caught:\n"
+            "    warnings.simplefilter('always')\n"
+            "    (g,) = _clib.compile_functions([ca.Function('twice', [x], [2 * x])], {})\n"
+            "print(g.class_name(), float(g(3.0)))\n"
+            "print([str(w.message) for w in caught])\n")
+    env = {**os.environ, "SERVOTUNE_CACHE": str(tmp_path / "c"), "SERVOTUNE_JIT": "1"}
+
+    def run():
+        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                           text=True, check=False)
+        assert r.returncode == 0, r.stderr
+        return r.stdout.splitlines()
+
+    first = run()
+    assert first[0] == "External 6.0" and first[1] == "[]"
+    (library,) = (tmp_path / "c" / "casadi").glob("kernels-*.so")
+    library.write_bytes(b"not a shared library")
+    second = run()
+    assert second[0] == "SXFunction 6.0" and "could not be loaded" in second[1]
