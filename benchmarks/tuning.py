@@ -39,10 +39,10 @@ Kv taken from the design itself (casadi updates it between its exchange rounds);
 the NLP's scale factors at casadi's reference start. Stability, which casadi keeps by continuity
 from stable starts and checks by the poles of the python-control plant, is checked here on every
 design by the eigenvalues of each model's closed-loop state matrix: that matrix is multi-affine in
-the design, ``A = A0 + c A1 + Kv A2 + Kp A3 + Kp/Ti A4 + Kp Kv A5``; the six matrices of each
-model are fitted from ``build_plant`` at random designs and the fit is checked at two others (it
-is exact to round-off), so the check costs one eigenvalue problem per model instead of an
-interconnection.
+the design, ``A = A0 + c A1 + Kv A2 + Kp A3 + Kp/Ti A4 + Kp Kv A5`` (the tuner's own
+:class:`servotune.tuning.solve.ClosedLoopMatrices`, whose deviation from ``build_plant`` at two
+random designs is reported), with the criterion of ``require_stable``, so the check costs one
+eigenvalue problem per model instead of an interconnection.
 
 Every final design is judged by ONE common evaluator: :func:`servotune.tuning.verify`
 (python-control on dense grids none of the methods used) and
@@ -83,67 +83,39 @@ from scipy.special import expit  # noqa: E402
 from servotune.axis import load_axis  # noqa: E402
 from servotune.design import tuning_problem  # noqa: E402
 from servotune.drive import current_loop_bandwidth  # noqa: E402
-from servotune.plant import build_plant  # noqa: E402
+from servotune.frequency import is_stable_matrix  # noqa: E402
 from servotune.tuning import Design, ResponseModel, requirement_checks, tune, verify  # noqa: E402
 from servotune.tuning import solve as tuning_solve  # noqa: E402
 from servotune.tuning.nlp import GATE_SHARPNESS, gate_parameters  # noqa: E402
+from servotune.tuning.solve import ClosedLoopMatrices  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO = 10.0
 
 
 class ClosedLoopMatrix:
-    """Closed-loop state matrices A_m(design) = sum_k mono_k(design) A_mk of every regime model
-    (multi-affine in the design, fitted)."""
-
-    @staticmethod
-    def monomials(d: Design) -> np.ndarray:
-        return np.array([1.0, d.c, d.kv, d.kp, d.kp / d.ti, d.kp * d.kv])
+    """Stability of every regime model from the closed-loop state matrices in their exact
+    multi-affine form (:class:`servotune.tuning.solve.ClosedLoopMatrices`, as the tuner uses
+    them), with the largest deviation from ``build_plant`` at a few random designs reported."""
 
     def __init__(self, problem, rng):
         if problem.drive is None:
             raise ValueError("the benchmark assumes an axis with a drive")
-        self.problem = problem
-
-        def draw():
-            return replace(problem.initial_design(), **{
+        self.matrices = ClosedLoopMatrices(problem)
+        if not self.matrices.exact:
+            raise RuntimeError("A(design) is not multi-affine here")
+        self.fit_error = 0.0
+        for _ in range(2):
+            d = replace(problem.initial_design(), **{
                 v: float(math.exp(rng.uniform(*np.log(problem.bounds[v])))) for v in problem.free})
-
-        fit = [problem.initial_design()] + [draw() for _ in range(9)]
-        check = [draw(), draw()]
-        m = np.array([self.monomials(d) for d in fit])
-        self.coef, self.n, self.fit_error = [], [], 0.0
-        for model in problem.regimes:
-            a = np.array([self._exact(model, d).ravel() for d in fit])
-            coef, *_ = np.linalg.lstsq(m, a, rcond=None)
-            n = math.isqrt(a.shape[1])
-            self.coef.append(coef)
-            self.n.append(n)
-            for d in check:
-                exact = self._exact(model, d)
-                approx = (self.monomials(d) @ coef).reshape(n, n)
-                self.fit_error = max(self.fit_error, float(np.abs(approx - exact).max()
-                                                           / np.abs(exact).max()))
-        if not self.fit_error < 1e-10:
-            raise RuntimeError(f"A(design) is not multi-affine here (fit error "
-                               f"{self.fit_error:.2g})")
-
-    def _exact(self, model, d: Design) -> np.ndarray:
-        p = self.problem
-        return build_plant(p.structure, p.drive_for(d), model.contact(d.c), p.pads).A
-
-    def matrices(self, d: Design) -> list[np.ndarray]:
-        mono = self.monomials(d)
-        return [(mono @ c).reshape(n, n) for c, n in zip(self.coef, self.n, strict=True)]
+            for a, model in zip(self.matrices(d), problem.regimes, strict=True):
+                exact = self.matrices.build(model, d).A
+                self.fit_error = max(self.fit_error,
+                                     float(np.abs(a - exact).max() / np.abs(exact).max()))
 
     def stable(self, d: Design) -> bool:
         """Every model stable (the criterion of ``servotune.frequency.require_stable``)."""
-        for a in self.matrices(d):
-            poles = np.linalg.eigvals(a)
-            scale = max(float(np.abs(poles).max(initial=0.0)), 1.0)
-            if (poles.real > 1e-9 * scale).any():
-                return False
-        return True
+        return all(is_stable_matrix(a) for a in self.matrices(d))
 
 
 def _gate(y):
