@@ -121,12 +121,22 @@ def hessenberg_solve(h, omega, rhs, out):
     "Efficient multivariable frequency response computations", IEEE TAC 26 (1981) 407-408).
     A singular system gives NaN.
     """
+    shifts = np.empty(omega.size, dtype=np.complex128)
+    for k in range(omega.size):
+        shifts[k] = 1j * omega[k]
+    hessenberg_solve_shifts(h, shifts, rhs, out)
+
+
+@numba.njit(cache=True)
+def hessenberg_solve_shifts(h, shifts, rhs, out):
+    """Solve ``(s_k I - H) x_k = rhs`` at complex shifts s_k (e.g. the points z of a discrete
+    system's frequency response); otherwise as :func:`hessenberg_solve`."""
     n = h.shape[0]
     m = rhs.shape[1]
     w = np.empty((n, n), dtype=np.complex128)
     x = np.empty((n, m), dtype=np.complex128)
-    for k in range(omega.size):
-        s = 1j * omega[k]
+    for k in range(shifts.size):
+        s = shifts[k]
         for i in range(n):
             for j in range(max(i - 1, 0), n):
                 w[i, j] = -h[i, j]

@@ -17,6 +17,7 @@ import numpy as np
 from . import frequency
 from .axis import Axis
 from .chatter import stability_lobes
+from .closed_loop import closed_loop
 from .drive import Drive
 from .plant import (
     Contact,
@@ -25,13 +26,13 @@ from .plant import (
     contact_kind,
     contact_kinds,
     friction_contact,
-    loop_transfer,
 )
 from .units import HZ_PER_RAD_S, RAD_S_PER_HZ
 
 __all__ = [
     "axis_contact",
     "axis_plant",
+    "axis_loop",
     "LoopReport",
     "loop_report",
     "ComplianceCurve",
@@ -142,6 +143,38 @@ def axis_plant(axis: Axis, contact: Contact, drive: Drive | None = None,
     return build_plant(axis.structure, drive, contact, pads if contact.pads != "free" else ())
 
 
+def axis_loop(axis: Axis, contact: Contact, drive: Drive | None = None,
+              controlled: bool = True):
+    """Return the controlled axis with a contact: continuous or sampled-data.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis: its structure and, when it has ``[friction]``, its pads.
+    contact : Contact
+        The guide-way contact model (a ``free`` contact gets no pads).
+    drive : Drive, optional
+        The drive (default: the axis' own); ignored when ``controlled`` is False.
+    controlled : bool
+        With the drive (True) or without motion control (False).
+
+    Returns
+    -------
+    servotune.closed_loop.ContinuousAxis or servotune.digital.SampledAxis
+        :func:`servotune.closed_loop.closed_loop` of the axis.
+
+    Raises
+    ------
+    AxisFormatError
+        Controlled, with no ``drive`` given and no ``[drive]`` in the axis.
+    ValueError
+        A contact acting at the pads on an axis without ``[friction]`` (no pads).
+    """
+    drive = (drive or axis.require_drive()) if controlled else None
+    pads = axis.pads if axis.friction is not None else ()
+    return closed_loop(axis.structure, drive, contact, pads if contact.pads != "free" else ())
+
+
 @dataclass(frozen=True)
 class LoopReport:
     """The velocity and position loops of an axis: analyses and their frequency responses.
@@ -204,9 +237,11 @@ def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
                 omega=None) -> LoopReport:
     """Return the margins, Ms and bandwidth of both loops of an axis.
 
-    The velocity loop is opened at its feedback with the position loop open, the position
-    loop with the velocity loop closed (:func:`servotune.plant.loop_transfer`), and each is
-    analysed by :func:`servotune.frequency.analyse_loop`.
+    The velocity loop is opened with the position loop open, the position loop with the
+    velocity loop closed, and each is analysed for margins, Ms and bandwidth: continuous
+    loops by :func:`servotune.frequency.analyse_loop`, the loops of a digital drive as the
+    sampled-data system it is (:class:`servotune.digital.SampledAxis`: each loop at its
+    controller's rate, up to its Nyquist frequency; NaN above).
 
     Parameters
     ----------
@@ -243,21 +278,20 @@ def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
     """
     drive = drive or axis.require_drive()
     omega = default_omega(0.1, 3000.0, 8001) if omega is None else np.asarray(omega, float)
-    pads = axis.pads if axis.friction is not None else ()
+    model = axis_loop(axis, contact, drive)
     out = {}
     for loop in ("velocity", "position"):
-        lt = loop_transfer(axis.structure, drive, contact, pads, loop)
         try:
-            analysed = frequency.analyse_loop(lt, omega)
+            analysed = model.analyse_loop(loop, omega)
         except UnstableLoopError as exc:
             if drive.sampling is not None and not drive.sampling.is_continuous:
                 raise UnstableLoopError(
-                    f"{exc}. The drive is sampled ([drive.sampling]): its delays cost phase "
-                    "that a continuous model does not show; tune the gains (servotune tune) "
-                    "or, for the paper's continuous model, pass --continuous") from None
+                    f"{exc}. The drive is sampled ([drive.sampling]): its sample-and-hold and "
+                    "computation delays cost phase that a continuous model does not show; tune "
+                    "the gains (servotune tune) or, for the paper's continuous model, pass "
+                    "--continuous") from None
             raise
-        out[loop] = (analysed,
-                     frequency.fast_frequency_response(lt, omega).complex.reshape(-1))
+        out[loop] = (analysed, model.loop_response(loop, omega))
     return LoopReport(contact, omega, out["velocity"][0], out["position"][0],
                       out["velocity"][1], out["position"][1])
 
@@ -326,9 +360,10 @@ def _in_band(omega: np.ndarray, band) -> np.ndarray:
     return sel
 
 
-def _curve(label, plant, omega, band) -> ComplianceCurve:
+def _curve(label, model, omega, band) -> ComplianceCurve:
     sel = _in_band(omega, band)
-    values = frequency.compliance(plant, omega)
+    model.require_stable()
+    values = model.compliance(omega)[0]
     value, where = frequency.peak(omega[sel], values[sel])
     return ComplianceCurve(label, omega, values, value, where, (float(band[0]), float(band[1])))
 
@@ -384,8 +419,8 @@ def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, o
     if controlled is None:
         controlled = drive is not None or axis.drive is not None
     _in_band(omega, axis.requirements.band)
-    plant = axis_plant(axis, contact, drive, controlled=controlled)
-    return _curve(label or contact.note or contact.kind, plant, omega, axis.requirements.band)
+    model = axis_loop(axis, contact, drive, controlled=controlled)
+    return _curve(label or contact.note or contact.kind, model, omega, axis.requirements.band)
 
 
 def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[ComplianceCurve]:
@@ -417,8 +452,8 @@ def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[Compliance
     _in_band(omega, axis.requirements.band)
     curves = []
     for c in c_values:
-        plant = axis_plant(axis, Contact.viscous(c), controlled=False)
-        curves.append(_curve(f"C = {c:.0e} N s/m", plant, omega, axis.requirements.band))
+        model = axis_loop(axis, Contact.viscous(c), controlled=False)
+        curves.append(_curve(f"C = {c:.0e} N s/m", model, omega, axis.requirements.band))
     return curves
 
 
@@ -459,11 +494,12 @@ def feed_compliance(axis: Axis, contact: Contact, drive: Drive | None = None, om
     """
     omega = _lobes_omega() if omega is None else np.asarray(omega, float)
     d = axis.cutting.direction if axis.cutting is not None else "x"
-    plant = axis_plant(axis, contact, drive,
-                       controlled=drive is not None or axis.drive is not None)
-    frequency.require_stable(plant)
-    return frequency.fast_frequency_response(plant, omega, inputs=[f"f_wp_{d}"],
-                                             outputs=[f"wp_{d}"])
+    model = axis_loop(axis, contact, drive,
+                      controlled=drive is not None or axis.drive is not None)
+    model.require_stable()
+    values = model.compliance(omega, f"wp.{d}", [f"wp.{d}"])
+    return control.frd(values.reshape(1, 1, -1), omega, inputs=[f"f_wp_{d}"],
+                       outputs=[f"wp_{d}"])
 
 
 def axis_lobes(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,

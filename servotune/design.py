@@ -23,7 +23,7 @@ import numpy as np
 from . import analysis, twomass
 from .axis import Axis
 from .blas import one_thread
-from .frequency import port_compliance
+from .closed_loop import axis_compliance
 from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
@@ -88,7 +88,7 @@ def process_amplitude(axis: Axis, drive, c: float, force_pp: float,
     omega = 2 * math.pi * np.geomspace(*(np.array(axis.requirements.band) / (2 * math.pi)),
                                        3000)
     contact = Contact.stiction(p.sigma0, p.sigma1, c)
-    h = port_compliance(axis.structure, omega, drive, contact, axis.pads,
+    h = axis_compliance(axis.structure, omega, drive, contact, axis.pads,
                         outputs=("wp.x", *axis.pads))
     i = int(np.argmax(np.abs(h[0])))
     amplitude = float(np.mean(np.abs(h[1:, i]))) * 0.5 * force_pp

@@ -38,7 +38,6 @@ sec 3. G. Ellis, Control System Design Guide, 4th ed., Butterworth-Heinemann (20
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
@@ -58,8 +57,9 @@ __all__ = [
     "LowPassFilter",
     "NotchFilter",
     "Sampling",
-    "pade_delay",
-    "pade_order",
+    "winding_block",
+    "pi_response",
+    "current_loop_response",
     "Drive",
     "drive_blocks",
     "CascadeResponse",
@@ -271,141 +271,45 @@ class NotchFilter:
         return control.tf([1.0, 2.0 * zp * self.depth * w, w * w], [1.0, 2.0 * zp * w, w * w])
 
 
-#: Phase error [deg] a Pade approximation of a delay may have within its range of validity.
-PADE_PHASE_TOLERANCE_DEG = 1.0
-#: Highest Pade order used (higher orders gain little and conditioning suffers).
-PADE_MAX_ORDER = 6
-
-
-@functools.cache
-def _pade_unit(order: int):
-    """Pade approximation of the unit delay e^-s as a balanced (A, B, C, D) (cached: read
-    only)."""
-    num, den = control.pade(1.0, order)
-    sys = control.ss(control.tf(num, den))
-    out = tuple(np.array(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
-    for m in out:
-        m.flags.writeable = False
-    return out
-
-
-@functools.lru_cache(maxsize=256)
-def pade_order(delay: float, omega_max: float,
-               tolerance_deg: float = PADE_PHASE_TOLERANCE_DEG) -> int:
-    """Return the lowest Pade order whose phase error stays within a tolerance up to a frequency.
-
-    The error is checked up to ``min(omega_max, pi/delay)`` [rad/s] (above half the sample rate
-    of a delay of one sample a continuous model of the sampled loop has no meaning anyway).
-    The (n, n) Pade approximant is all-pass (its gain is exactly 1), so its only error is the
-    phase; it is computed here, not estimated.
-
-    Parameters
-    ----------
-    delay : float
-        The delay T [s], > 0.
-    omega_max : float
-        Highest frequency [rad/s] where the phase error is to stay within the tolerance.
-    tolerance_deg : float, optional
-        Largest phase error [deg] (default ``PADE_PHASE_TOLERANCE_DEG``, 1 deg).
-
-    Returns
-    -------
-    int
-        The order, at most ``PADE_MAX_ORDER`` (returned also when even that order misses the
-        tolerance).
-
-    Raises
-    ------
-    ValueError
-        When ``delay`` is not finite and > 0.
-
-    Examples
-    --------
-    A 187.5 us delay (1.5 periods of a 125 us current loop) up to 3 kHz:
-
-    >>> pade_order(187.5e-6, 2 * math.pi * 3000.0)
-    4
-    """
-    delay = positive("pade_order", "delay", delay, "s")
-    x = min(float(omega_max) * delay, math.pi)
-    for order in range(1, PADE_MAX_ORDER + 1):
-        num, den = control.pade(1.0, order)
-        grid = np.linspace(0.0, x, 64)
-        value = np.polyval(num, 1j * grid) / np.polyval(den, 1j * grid)
-        error = np.abs(np.angle(value * np.exp(1j * grid)))
-        if np.degrees(error.max()) <= tolerance_deg:
-            return order
-    return PADE_MAX_ORDER
-
-
-def pade_delay(delay: float, order: int, inputs: str, outputs: str,
-               name: str) -> control.StateSpace:
-    """Return a delay of ``delay`` seconds as a Pade state-space block of the given order.
-
-    Built from the Pade approximant of the unit delay and scaled in time (s -> s T), which keeps
-    the realisation well conditioned for any delay.
-
-    Parameters
-    ----------
-    delay : float
-        The delay T [s], > 0.
-    order : int
-        Order of the (n, n) Pade approximant (:func:`pade_order` chooses it).
-    inputs : str
-        Name of the input signal.
-    outputs : str
-        Name of the output signal.
-    name : str
-        Name of the block; its states are ``<name>_0``, ``<name>_1``, ...
-
-    Returns
-    -------
-    control.StateSpace
-        ``order`` states, gain 1 at every frequency, phase ``-omega T`` at low frequency.
-
-    Raises
-    ------
-    ValueError
-        When ``delay`` is not finite and > 0.
-
-    Examples
-    --------
-    >>> block = pade_delay(1e-3, 3, "u", "y", "delay")
-    >>> z = complex(block(2j * math.pi * 50.0))                  # 50 Hz through 1 ms
-    >>> round(abs(z), 9), round(math.degrees(np.angle(z)), 3)     # gain 1, phase -18 deg
-    (1.0, -18.0)
-    """
-    a, b, c, d = _pade_unit(order)
-    t = positive("pade_delay", "delay", delay, "s")
-    return control.ss(a / t, b / t, c, d, inputs=inputs, outputs=outputs, name=name,
-                      states=[f"{name}_{i}" for i in range(a.shape[0])])
+#: Relative tolerance on a sample period being a whole multiple of another.
+MULTIPLE_TOLERANCE = 1e-6
+#: Rules for the integral of the discrete PI controllers.
+INTEGRAL_RULES = ("forward_euler", "tustin")
 
 
 @dataclass(frozen=True)
 class Sampling:
-    """The digital drive: sample periods of the three controllers and what they delay.
+    """The digital drive: sample periods of the three controllers and how they compute.
 
-    Each controller computes from samples and applies its output after a computation delay of
-    ``computation_delay`` periods and then holds it for one period (zero-order hold): for
-    frequencies well below half the sample rate the sampled loop acts as the continuous one
-    delayed by ``(computation_delay + 1/2) T``. The speed is measured as the difference of two
-    encoder positions one velocity period apart, a moving average that delays it by half a
-    period, optionally smoothed by a first-order filter (``speed_filter`` [s]). The delays
-    enter the linear models as Pade approximations of the order :func:`pade_order` picks for
-    1 deg of phase error up to ``pade_frequency`` (or half the sample rate), and the
-    frequency-domain models of the tuning as exact exp(-j w T).
+    Each controller samples its inputs at its instants kT', computes, and applies its output
+    ``computation_delay`` whole periods later, held until its next update (zero-order hold);
+    the motor voltage is held over each current period. The periods are synchronised whole
+    multiples: the velocity period a multiple of the current period, the position period a
+    multiple of the velocity period. The speed is the backward difference of the sampled rotor
+    angle, optionally smoothed by a first-order filter (``speed_filter`` [s]); the PI
+    controllers integrate by forward Euler (default) or Tustin. The conventions in full, and
+    the sampled-data model of the loop they make, are in :mod:`servotune.digital`.
 
     Parameters
     ----------
     current_period, velocity_period, position_period : float
-        Sample periods [s]; 0 makes that controller continuous.
-    computation_delay : float
-        Delay from sampling to applying the output, in periods (1: the output computed from the
+        Sample periods [s]; all three 0 is the continuous drive of the paper.
+    computation_delay : int
+        Whole periods from sampling to applying the output (1: the output computed from the
         samples of one cycle is applied at the start of the next).
     speed_filter : float
-        Time constant [s] of a first-order filter of the measured speed (0: none).
-    pade_frequency : float
-        Angular frequency [rad/s] up to which the Pade approximations keep 1 deg of phase.
+        Time constant [s] of the first-order filter of the measured speed (0: none).
+    integral_rule : {"forward_euler", "tustin"}
+        How the PI controllers integrate.
+
+    Raises
+    ------
+    ValueError
+        Negative periods, periods given in microseconds, some periods zero and others not,
+        a faster controller outside a slower one (the position period shorter than the
+        velocity period, or the velocity period shorter than the current period), periods
+        that are not whole multiples of each other, a computation delay that is not a whole
+        number of periods in [0, 10], or an unknown integral rule.
 
     Notes
     -----
@@ -419,153 +323,112 @@ class Sampling:
     References
     ----------
     K. J. Astrom, B. Wittenmark, Computer-Controlled Systems, 3rd ed., Prentice Hall (1997),
-    sec 7.5 (the zero-order hold as a half-period delay). G. Ellis, Control System Design Guide,
-    4th ed. (2012), ch 4 (sampling and computation delay in servo loops).
+    ch 2, 7 and 8 (sampled-data systems, the zero-order hold, discretised PI). G. Ellis,
+    Control System Design Guide, 4th ed. (2012), ch 4 (sampling and computation delay in servo
+    loops).
 
     Examples
     --------
     >>> s = Sampling()
-    >>> s.current_delay, s.velocity_delay, s.speed_measurement_delay, s.position_delay
-    (0.0001875, 0.0001875, 6.25e-05, 0.0015)
+    >>> s.multiples(), s.is_continuous
+    ((1, 8), False)
     """
 
     current_period: float = 125e-6
     velocity_period: float = 125e-6
     position_period: float = 1e-3
-    computation_delay: float = 1.0
+    computation_delay: int = 1
     speed_filter: float = 0.0
-    pade_frequency: float = 2.0 * math.pi * 3000.0
+    integral_rule: str = "forward_euler"
 
     def __post_init__(self) -> None:
-        for name in ("current_period", "velocity_period", "position_period",
-                     "computation_delay", "speed_filter"):
-            unit = "periods" if name == "computation_delay" else "s"
-            object.__setattr__(self, name, positive("Sampling", name, getattr(self, name), unit,
+        periods = ("current_period", "velocity_period", "position_period")
+        for name in (*periods, "speed_filter"):
+            object.__setattr__(self, name, positive("Sampling", name, getattr(self, name), "s",
                                                     allow_zero=True))
-        object.__setattr__(self, "pade_frequency",
-                           positive("Sampling", "pade_frequency", self.pade_frequency, "rad/s"))
-        for name in ("current_period", "velocity_period", "position_period", "speed_filter"):
             if getattr(self, name) > 1.0:
                 raise ValueError(f"Sampling.{name} is {getattr(self, name):g} s; give it in "
                                  "seconds (e.g. 125e-6 for 125 us)")
-        if self.computation_delay > 10:
-            raise ValueError(f"Sampling.computation_delay is {self.computation_delay:g} "
-                             "periods; it is counted in sample periods (typically 0.5 to 2)")
+        delay = self.computation_delay
+        if (isinstance(delay, bool) or not isinstance(delay, (int, float))
+                or not math.isfinite(delay) or delay != round(delay) or not 0 <= delay <= 10):
+            raise ValueError(f"Sampling.computation_delay is {delay!r}; it counts whole sample "
+                             "periods from sampling to applying the output: give 0, 1 (the "
+                             "usual), 2 ... up to 10")
+        object.__setattr__(self, "computation_delay", round(delay))
+        if self.integral_rule not in INTEGRAL_RULES:
+            raise ValueError(f"Sampling.integral_rule is {self.integral_rule!r}; use one of "
+                             f"{list(INTEGRAL_RULES)}")
+        zero = [name for name in periods if getattr(self, name) == 0.0]
+        if zero and len(zero) < 3:
+            raise ValueError(f"Sampling: {', '.join(zero)} zero but not the other periods; "
+                             "give all three sample periods, or none (continuous = true) for "
+                             "the paper's continuous drive")
+        if not zero:
+            self.multiples()
 
     @classmethod
     def continuous(cls) -> Sampling:
         """No sampling, no delays: the continuous drive of the paper (sec 3)."""
-        return cls(0.0, 0.0, 0.0, 0.0, 0.0)
+        return cls(0.0, 0.0, 0.0, 0, 0.0)
 
     @property
     def is_continuous(self) -> bool:
-        return not any((self.current_delay, self.velocity_delay, self.speed_measurement_delay,
-                        self.position_delay, self.speed_filter))
+        """True for the continuous drive (no sample periods)."""
+        return self.current_period == 0.0
 
-    @property
-    def current_delay(self) -> float:
-        """Delay of the current controller's voltage output [s]."""
-        return (self.computation_delay + 0.5) * self.current_period
-
-    @property
-    def velocity_delay(self) -> float:
-        """Delay of the velocity controller's torque set-point [s]."""
-        return (self.computation_delay + 0.5) * self.velocity_period
-
-    @property
-    def speed_measurement_delay(self) -> float:
-        """Delay of the speed measured by differencing positions one period apart [s]."""
-        return 0.5 * self.velocity_period
-
-    @property
-    def position_delay(self) -> float:
-        """Delay of the position controller's speed command [s]."""
-        return (self.computation_delay + 0.5) * self.position_period
-
-    def velocity_loop_delay(self) -> float:
-        """Return the total pure delay around the velocity loop outside the current loop [s].
+    def multiples(self) -> tuple[int, int]:
+        """Return the velocity period over the current period and the position period over the
+        velocity period.
 
         Returns
         -------
-        float
-            ``velocity_delay + speed_measurement_delay`` [s].
+        (int, int)
+            ``(N_v, N_p)``: ``velocity_period = N_v current_period``,
+            ``position_period = N_p velocity_period``.
+
+        Raises
+        ------
+        ValueError
+            For a continuous drive, a faster controller outside a slower one, or periods that
+            are not whole multiples (within :data:`MULTIPLE_TOLERANCE`).
         """
-        return self.velocity_delay + self.speed_measurement_delay
-
-    def delay_block(self, delay: float, inputs: str, outputs: str,
-                    name: str) -> control.StateSpace | None:
-        """Return a Pade block for one of the delays (None for a zero delay).
-
-        Parameters
-        ----------
-        delay : float
-            The delay [s]; <= 0 gives None.
-        inputs : str
-            Name of the input signal.
-        outputs : str
-            Name of the output signal.
-        name : str
-            Name of the block.
-
-        Returns
-        -------
-        control.StateSpace or None
-            :func:`pade_delay` of the order :func:`pade_order` chooses up to
-            ``pade_frequency``.
-        """
-        if delay <= 0.0:
-            return None
-        return pade_delay(delay, pade_order(delay, self.pade_frequency), inputs, outputs, name)
-
-    def delay_response(self, delay: float, s) -> np.ndarray:
-        """Return the exact delay exp(-s T) at complex frequencies ``s``.
-
-        Parameters
-        ----------
-        delay : float
-            The delay T [s].
-        s : array_like of complex
-            Complex frequencies [rad/s] (``1j * omega`` on the imaginary axis).
-
-        Returns
-        -------
-        numpy.ndarray
-            exp(-s T), shape of ``s``.
-        """
-        return np.exp(-np.asarray(s) * delay)
-
-    def speed_filter_response(self, s) -> np.ndarray:
-        """Return the speed measurement's response: half-period delay times the first-order filter.
-
-        Parameters
-        ----------
-        s : array_like of complex
-            Complex frequencies [rad/s].
-
-        Returns
-        -------
-        numpy.ndarray
-            ``exp(-s T_v / 2) / (1 + s T_f)``, shape of ``s`` (T_v the velocity period, T_f the
-            speed filter).
-        """
-        s = np.asarray(s)
-        return self.delay_response(self.speed_measurement_delay, s) / (1.0 + s * self.speed_filter)
+        if self.is_continuous:
+            raise ValueError("a continuous drive has no sample periods")
+        pairs = (("velocity_period", "current_period", "the speed controller runs inside the "
+                  "current controller's cycle, never faster"),
+                 ("position_period", "velocity_period", "the position controller runs "
+                  "inside the speed controller's cycle, never faster"))
+        out = []
+        for slow, fast, why in pairs:
+            ts, tf = getattr(self, slow), getattr(self, fast)
+            ratio = ts / tf
+            n = round(ratio)
+            if n < 1:
+                raise ValueError(f"Sampling.{slow} ({ts:g} s) is shorter than {fast} "
+                                 f"({tf:g} s): {why}; give {slow} >= {tf:g} s")
+            if abs(ratio - n) > MULTIPLE_TOLERANCE * ratio:
+                raise ValueError(
+                    f"Sampling.{slow} ({ts:g} s) is not a whole multiple of {fast} ({tf:g} s): "
+                    f"synchronised drive controllers run at whole multiples of each other; "
+                    f"give {slow} = {max(n, 1) * tf:g} s (x{max(n, 1)}) or "
+                    f"{(n + 1) * tf:g} s (x{n + 1})")
+            out.append(int(n))
+        return out[0], out[1]
 
     def to_dict(self) -> dict:
-        """SI values, with the derived delays.
+        """SI values.
 
         Returns
         -------
         dict
             JSON-ready values (SI; str, numbers, lists, None).
         """
-        return {"current_period": self.current_period, "velocity_period": self.velocity_period,
+        return {"continuous": self.is_continuous, "current_period": self.current_period,
+                "velocity_period": self.velocity_period,
                 "position_period": self.position_period,
                 "computation_delay_periods": self.computation_delay,
-                "speed_filter": self.speed_filter, "current_delay": self.current_delay,
-                "velocity_delay": self.velocity_delay,
-                "speed_measurement_delay": self.speed_measurement_delay,
-                "position_delay": self.position_delay}
+                "speed_filter": self.speed_filter, "integral_rule": self.integral_rule}
 
 
 @dataclass(frozen=True)
@@ -712,7 +575,7 @@ class Drive:
 
 
 def drive_blocks(drive: Drive) -> list[control.StateSpace]:
-    """Return the cascade as python-control blocks with named signals, for ``control.interconnect``.
+    """Return the continuous cascade as python-control blocks with named signals.
 
     Signals (SI):
 
@@ -720,8 +583,7 @@ def drive_blocks(drive: Drive) -> list[control.StateSpace]:
     ``x_ref``, ``v_ref``,     position [m], velocity [m/s] and acceleration [m/s^2]
     ``a_ref``                 references (the last two feed the feed-forwards)
     ``x_fb``                  measured position [m]
-    ``omega_fb``              motor speed, rotor minus stator [rad/s], before the speed
-                              measurement (delay, filter) of a digital drive
+    ``omega_fb``              motor speed, rotor minus stator [rad/s]
     ``following_error``       x_ref - x_fb [m]
     ``omega_cmd``             motor speed command [rad/s]
     ``torque_set``            torque set-point after feed-forward and filters [N m]
@@ -730,10 +592,10 @@ def drive_blocks(drive: Drive) -> list[control.StateSpace]:
     ``current``               winding current [A]
     ========================  =====================================================
 
-    With a digital drive (:attr:`Drive.sampling`) the controllers' outputs pass through Pade
-    blocks of their delays (``position_delay``, ``velocity_delay``, ``current_delay``) and the
-    measured speed through the half-period delay of the speed measurement and the speed filter
-    (see :class:`Sampling`).
+    This is the continuous drive of the paper (``Sampling.continuous()``); a digital drive is
+    a sampled-data system, not a continuous one: its controllers are the difference equations
+    of :func:`servotune.digital.digital_controller` and its loop the sampled-data model of
+    :class:`servotune.digital.SampledAxis`. The winding alone is :func:`winding_block`.
 
     The position feedback ``x_fb`` and the speeds are produced by the plant (see
     :mod:`servotune.plant`); these blocks only compute.
@@ -741,48 +603,31 @@ def drive_blocks(drive: Drive) -> list[control.StateSpace]:
     Parameters
     ----------
     drive : Drive
-        The drive.
+        The drive (continuous).
 
     Returns
     -------
     list of control.StateSpace
-        The named blocks: the position P controller, the velocity PI, the current PI and
-        winding, the filters and feed-forwards, and the delay blocks of a digital drive.
+        The named blocks: the position P controller, the velocity PI, the current PI, the
+        filters and feed-forwards, and the winding.
+
+    Raises
+    ------
+    ValueError
+        For a sampled drive.
     """
+    if not drive.digital.is_continuous:
+        raise ValueError("drive_blocks() is the continuous cascade; this drive is sampled "
+                         "([drive.sampling]): use servotune.digital.SampledAxis")
     kv, r = drive.kv, drive.ratio
-    sampling = drive.digital
-    blocks = []
-
-    def delayed(delay, signal, name):
-        """The signal name after a delay block (the block appended), or the signal itself."""
-        block = sampling.delay_block(delay, f"{signal}_raw", signal, name)
-        if block is None:
-            return signal, signal
-        blocks.append(block)
-        return f"{signal}_raw", signal
-
-    pos_out, _ = delayed(sampling.position_delay, "omega_cmd_pos", "position_delay")
-    blocks.append(control.ss(
+    blocks = [control.ss(
         [], [], [], [[1.0, -1.0, 0.0], [kv / r, -kv / r, drive.velocity_feedforward / r]],
-        inputs=["x_ref", "x_fb", "v_ref"], outputs=["following_error", pos_out],
-        name="position_controller"))
-    # speed measurement: half-period delay of the position difference, then the filter
-    measured = "omega_fb"
-    block = sampling.delay_block(sampling.speed_measurement_delay, "omega_fb",
-                                 "omega_fb_delayed", "speed_measurement_delay")
-    if block is not None:
-        blocks.append(block)
-        measured = "omega_fb_delayed"
-    if sampling.speed_filter > 0.0:
-        tau = sampling.speed_filter
-        blocks.append(control.ss([[-1.0 / tau]], [[1.0 / tau]], [[1.0]], [[0.0]],
-                                 inputs=measured, outputs="omega_measured", name="speed_filter",
-                                 states=["speed_filter"]))
-        measured = "omega_measured"
-    blocks.append(control.ss([], [], [], [[1.0, -1.0]], inputs=["omega_cmd_pos", measured],
+        inputs=["x_ref", "x_fb", "v_ref"], outputs=["following_error", "omega_cmd_pos"],
+        name="position_controller")]
+    blocks.append(control.ss([], [], [], [[1.0, -1.0]], inputs=["omega_cmd_pos", "omega_fb"],
                              outputs=["omega_error"], name="velocity_error"))
-    vel_out, _ = delayed(sampling.velocity_delay, "torque_pi", "velocity_delay")
-    blocks.append(drive.velocity_loop.state_space("omega_error", vel_out, "velocity_controller"))
+    blocks.append(drive.velocity_loop.state_space("omega_error", "torque_pi",
+                                                  "velocity_controller"))
     blocks.append(control.ss([], [], [], [[1.0, drive.torque_feedforward_inertia / r]],
                              inputs=["torque_pi", "a_ref"], outputs=["torque_unfiltered"],
                              name="torque_feedforward"))
@@ -791,48 +636,60 @@ def drive_blocks(drive: Drive) -> list[control.StateSpace]:
     m, cl = drive.motor, drive.current_loop
     # current PI on i_cmd = T_set / kt:  u = kp (i_cmd - i) + (kp/ti) xi,  d xi/dt = i_cmd - i
     ki = 0.0 if math.isinf(cl.ti) else cl.kp / cl.ti
-    volt_out, _ = delayed(sampling.current_delay, "voltage", "current_delay")
     gain = [[cl.kp / m.torque_constant, -cl.kp]]
     if ki:
         blocks.append(control.ss([[0.0]], [[1.0 / m.torque_constant, -1.0]], [[ki]], gain,
-                                 inputs=["torque_set", "current"], outputs=[volt_out],
+                                 inputs=["torque_set", "current"], outputs=["voltage"],
                                  states=["current_integral"], name="current_controller"))
     else:
         blocks.append(control.ss([], [], [], gain, inputs=["torque_set", "current"],
-                                 outputs=[volt_out], name="current_controller"))
-    # winding:  L di/dt = u - R i - ke omega_rel;  torque = kt i
-    blocks.append(control.ss([[-m.resistance / m.inductance]],
-                             [[1.0 / m.inductance, -m.back_emf_constant / m.inductance]],
-                             [[m.torque_constant], [1.0]], np.zeros((2, 2)),
-                             inputs=["voltage", "omega_rel"], outputs=["torque", "current"],
-                             states=["current"], name="winding"))
+                                 outputs=["voltage"], name="current_controller"))
+    blocks.append(winding_block(m))
     return blocks
+
+
+def winding_block(motor: Motor) -> control.StateSpace:
+    """Return the motor winding as a named block: ``L di/dt = u - R i - ke omega_rel``.
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor.
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``voltage`` [V], ``omega_rel`` [rad/s]; outputs ``torque`` = kt i [N m] and
+        ``current`` [A]; one state, the current.
+    """
+    m = motor
+    return control.ss([[-m.resistance / m.inductance]],
+                      [[1.0 / m.inductance, -m.back_emf_constant / m.inductance]],
+                      [[m.torque_constant], [1.0]], np.zeros((2, 2)),
+                      inputs=["voltage", "omega_rel"], outputs=["torque", "current"],
+                      states=["current"], name="winding")
 
 
 @dataclass(frozen=True)
 class CascadeResponse:
-    """The parts of the cascade at complex frequencies s (arrays), for frequency-domain models.
+    """The parts of the continuous cascade at complex frequencies s (arrays).
 
     With the air-gap torque T, the motor speed omega = s phi and the measured position x_fb::
 
-        T = (a (D_p Kv/r (x_ref - x_fb) - M_v omega) - kt ke omega) / den
+        T = (a (Kv/r (x_ref - x_fb) - omega) - kt ke omega) / den
         a = current_forward * setpoint * C_v(s)
 
     Attributes
     ----------
-    current_forward : C_i(s) D_i(s), the current PI and the delay of its output.
-    winding : s L + R + C_i(s) D_i(s), the closed current loop's denominator.
-    setpoint : F(s) D_v(s), the torque set-point filters and the velocity controller's delay.
-    speed_measurement : M_v(s), the speed measurement's delay and filter.
-    position_delay : D_p(s), the delay of the position controller's output.
+    current_forward : C_i(s), the current PI.
+    winding : s L + R + C_i(s), the closed current loop's denominator.
+    setpoint : F(s), the torque set-point filters.
     velocity_pi : C_v(s), the velocity PI.
     """
 
     current_forward: np.ndarray
     winding: np.ndarray
     setpoint: np.ndarray
-    speed_measurement: np.ndarray
-    position_delay: np.ndarray
     velocity_pi: np.ndarray
 
 
@@ -842,78 +699,124 @@ def _tf_at(tf: control.TransferFunction, s: np.ndarray) -> np.ndarray:
     return np.polyval(num, s) / np.polyval(den, s)
 
 
-def cascade_response(drive: Drive, s, exact_delays: bool = True) -> CascadeResponse:
-    """Return the cascade's transfer functions at complex frequencies ``s`` [rad/s].
-
-    The digital drive's delays are exact exponentials (``exact_delays=True``) or the Pade
-    approximations the state-space blocks of :func:`drive_blocks` use (False): the second
-    reproduces the state-space model to rounding, the first is the sampled drive it stands for.
+def cascade_response(drive: Drive, s) -> CascadeResponse:
+    """Return the continuous cascade's transfer functions at complex frequencies ``s`` [rad/s].
 
     Parameters
     ----------
     drive : Drive
-        The drive; its ``digital`` sampling gives the delays (all zero when continuous).
+        The drive (continuous; a sampled drive is :class:`servotune.digital.SampledAxis`).
     s : array_like of complex
         Complex frequencies [rad/s] (``1j * omega`` on the imaginary axis).
-    exact_delays : bool, optional
-        Exact delays (default) or their Pade approximations.
 
     Returns
     -------
     CascadeResponse
         The factors of the cascade, each an array of the shape of ``s``.
 
+    Raises
+    ------
+    ValueError
+        For a sampled drive.
+
     Examples
     --------
-    Without sampling the delays are 1:
-
     >>> d = Drive(Motor(1.6, 1.6, 0.25, 4e-3), ratio=3.183e-3,
     ...           current_loop=PIController(20.0, 1e-3), velocity_loop=PIController(30.0, 0.01),
     ...           kv=16.7)
     >>> r = cascade_response(d, np.array([100j]))
-    >>> complex(r.position_delay[0]), complex(r.speed_measurement[0])
-    ((1+0j), (1+0j))
+    >>> complex(r.setpoint[0])
+    (1+0j)
     """
+    if not drive.digital.is_continuous:
+        raise ValueError("cascade_response() is the continuous cascade; this drive is sampled")
     s = np.asarray(s, dtype=complex)
-    sampling = drive.digital
-
-    def delay(value):
-        if value <= 0.0:
-            return np.ones_like(s)
-        if exact_delays:
-            return np.exp(-s * value)
-        order = pade_order(value, sampling.pade_frequency)
-        num, den = control.pade(1.0, order)
-        return np.polyval(num, s * value) / np.polyval(den, s * value)
-
     m = drive.motor
-    ci = _tf_at(drive.current_loop.transfer_function(), s) * delay(sampling.current_delay)
-    measurement = delay(sampling.speed_measurement_delay) / (1.0 + s * sampling.speed_filter)
+    ci = _tf_at(drive.current_loop.transfer_function(), s)
     return CascadeResponse(
         current_forward=ci, winding=s * m.inductance + m.resistance + ci,
-        setpoint=_tf_at(drive.torque_filter(), s) * delay(sampling.velocity_delay),
-        speed_measurement=measurement, position_delay=delay(sampling.position_delay),
+        setpoint=_tf_at(drive.torque_filter(), s),
         velocity_pi=_tf_at(drive.velocity_loop.transfer_function(), s))
 
 
-def current_loop_bandwidth(drive: Drive, exact_delays: bool = True) -> float:
-    """Return the closed current loop's -3 dB bandwidth [rad/s] with the rotor held.
+def pi_response(pi: PIController, z, period: float, rule: str) -> np.ndarray:
+    """Return a discrete PI controller's transfer function at points ``z`` of the unit circle.
 
-    Without back-EMF, ``|C_i D_i / (s L + R + C_i D_i)|`` falls to 1/sqrt2 of its value at low
-    frequency (searched on 6001 log-spaced frequencies from 1 to 1e6 rad/s, interpolated
-    log-linearly between the two around the crossing).
+    Parameters
+    ----------
+    pi : PIController
+        kp and ti [s].
+    z : array_like of complex
+        ``exp(j w T)``.
+    period : float
+        Sample period T [s].
+    rule : {"forward_euler", "tustin"}
+        ``kp (1 + T/(ti (z - 1)))`` or ``kp (1 + T/(2 ti) (z + 1)/(z - 1))``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The response, shape of ``z``.
+    """
+    z = np.asarray(z, dtype=complex)
+    if math.isinf(pi.ti):
+        return np.full(z.shape, pi.kp, dtype=complex)
+    q = period / (z - 1.0) if rule == "forward_euler" else 0.5 * period * (z + 1.0) / (z - 1.0)
+    return pi.kp * (1.0 + q / pi.ti)
+
+
+def current_loop_response(drive: Drive, omega) -> np.ndarray:
+    """Return the closed current loop i/i_set with the rotor held, at frequencies ``omega``.
+
+    Continuous: ``C_i / (s L + R + C_i)``. Sampled: the winding under zero-order hold,
+    ``G(z) = (1 - p) / (R (z - p))`` with ``p = exp(-R T / L)`` (exact at the samples), the
+    discrete current PI and its computation delay ``z^-d``:
+    ``z^-d C_i(z) G(z) / (1 + z^-d C_i(z) G(z))`` at ``z = exp(j w T)``.
 
     Parameters
     ----------
     drive : Drive
-        The drive (motor winding, current PI, and the current controller's delay).
-    exact_delays : bool, optional
-        Exact delays (default) or their Pade approximations (:func:`cascade_response`).
+        The drive.
+    omega : array_like
+        Angular frequencies [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex, shape of ``omega``.
+    """
+    omega = np.asarray(omega, dtype=float)
+    m = drive.motor
+    s = drive.digital
+    if s.is_continuous:
+        ci = _tf_at(drive.current_loop.transfer_function(), 1j * omega)
+        return ci / (1j * omega * m.inductance + m.resistance + ci)
+    t = s.current_period
+    z = np.exp(1j * omega * t)
+    p = math.exp(-m.resistance * t / m.inductance)
+    g = (1.0 - p) / (m.resistance * (z - p))
+    loop = z ** (-s.computation_delay) * pi_response(drive.current_loop, z, t,
+                                                      s.integral_rule) * g
+    return loop / (1.0 + loop)
+
+
+def current_loop_bandwidth(drive: Drive) -> float:
+    """Return the closed current loop's -3 dB bandwidth [rad/s] with the rotor held.
+
+    Without back-EMF, ``|i / i_set|`` (:func:`current_loop_response`: continuous, or the
+    sampled loop of a digital drive) falls to 1/sqrt2 of its value at low frequency (searched
+    on 6001 log-spaced frequencies from 1 rad/s to 1e6 rad/s, or to half the sample rate of a
+    digital drive, interpolated log-linearly between the two around the crossing).
+
+    Parameters
+    ----------
+    drive : Drive
+        The drive (motor winding, current PI, sampling).
 
     Returns
     -------
     float
-        The bandwidth [rad/s]; ``inf`` when the gain stays above 1/sqrt2 up to 1e6 rad/s.
+        The bandwidth [rad/s]; ``inf`` when the gain stays above 1/sqrt2 up to the top.
 
     Examples
     --------
@@ -924,9 +827,10 @@ def current_loop_bandwidth(drive: Drive, exact_delays: bool = True) -> float:
     >>> round(current_loop_bandwidth(d) / ((20.0 + 0.25) / 4e-3), 4)
     1.0
     """
-    omega = np.geomspace(1.0, 1e6, 6001)
-    parts = cascade_response(drive, 1j * omega, exact_delays=exact_delays)
-    t = np.abs(parts.current_forward / parts.winding)
+    s = drive.digital
+    top = 1e6 if s.is_continuous else math.pi / s.current_period
+    omega = np.geomspace(1.0, top, 6001)
+    t = np.abs(current_loop_response(drive, omega))
     t0 = t[0]
     below = np.nonzero(t < t0 / math.sqrt(2.0))[0]
     if not below.size:

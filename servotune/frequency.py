@@ -49,6 +49,7 @@ __all__ = [
     "compliance",
     "LoopAnalysis",
     "analyse_loop",
+    "analyse_response",
     "ClosedLoopPoles",
     "closed_loop_poles",
     "require_stable",
@@ -614,14 +615,14 @@ def port_compliance(structure: ModalModel, omega, drive: Drive | None = None,
             gh[:, j, :] = (g_pad * h_u[col]).T
             u[:, j] = g_pad * h_f[col]
     if drive is not None:
-        # the cascade with the digital drive's delays (servotune.drive.cascade_response):
-        # T = -(a D_p Kv/r x_fb + (a M_v + b) s phi) / den
+        # the continuous cascade (servotune.drive.cascade_response):
+        # T = -(a Kv/r x_fb + (a + b) s phi) / den
         parts = cascade_response(drive, s)
         den = parts.winding
         a = parts.current_forward * parts.setpoint * parts.velocity_pi
         b = m.torque_constant * m.back_emf_constant
-        g_fb = -(a * parts.position_delay * drive.kv / drive.ratio) / den  # per feedback x
-        g_rel = -(a * parts.speed_measurement + b) * s / den              # per rotor angle
+        g_fb = -(a * drive.kv / drive.ratio) / den  # per feedback x
+        g_rel = -(a + b) * s / den                  # per rotor angle
         gh[:, -1, :] = (g_fb * h_u[-1] + g_rel * h_u[-2]).T
         u[:, -1] = g_fb * h_f[-1] + g_rel * h_f[-2]
     lhs = np.eye(n_u)[None] - gh
@@ -871,6 +872,46 @@ def analyse_loop(loop: control.StateSpace, omega=None) -> LoopAnalysis:
     # margins and Ms need far less than the default 1e-10 (and the modal form then rarely falls
     # back to the slow per-frequency solves)
     l_jw = fast_frequency_response(loop, omega, rtol=1e-7).complex.reshape(-1)
+    # the closed-loop gain two decades below the grid stands for the DC gain: the state
+    # space's own dcgain() is ill-conditioned when the loop carries a rigid-body mode (a free
+    # integrator of position)
+    l_low = complex(fast_frequency_response(loop, [omega[0] / 100.0],
+                                            rtol=1e-7).complex.reshape(-1)[0])
+    return analyse_response(omega, l_jw, l_low)
+
+
+def analyse_response(omega, l_jw, l_low: complex) -> LoopAnalysis:
+    """Margins, sensitivity peak and bandwidth from a loop's frequency response.
+
+    The closed loop's stability is the caller's to check (:func:`analyse_loop` checks the
+    poles of a continuous loop, :class:`servotune.digital.SampledAxis` the multipliers of a
+    sampled one).
+
+    Parameters
+    ----------
+    omega : array_like
+        Dense grid [rad/s], 1-D, increasing.
+    l_jw : array_like of complex
+        The loop transfer function on the grid.
+    l_low : complex
+        L two decades below the grid (the low-frequency reference of the bandwidth).
+
+    Returns
+    -------
+    LoopAnalysis
+        As :func:`analyse_loop`.
+
+    Examples
+    --------
+    L = 1/(j w) on a grid: 90 deg phase margin, Ms 1, bandwidth 1 rad/s.
+
+    >>> w = np.geomspace(0.01, 100.0, 2001)
+    >>> r = analyse_response(w, 1.0 / (1j * w), 1.0 / (1j * 1e-4))
+    >>> round(r.phase_margin_deg, 3), round(r.ms, 3), round(r.bandwidth, 3)
+    (90.0, 1.0, 1.0)
+    """
+    omega = _omega(omega)
+    l_jw = np.asarray(l_jw, dtype=complex).reshape(-1)
     sens = 1.0 / (1.0 + l_jw)
     ms, w_ms = peak(omega, sens)
     t = np.abs(l_jw / (1.0 + l_jw))
@@ -901,11 +942,6 @@ def analyse_loop(loop: control.StateSpace, omega=None) -> LoopAnalysis:
             wpc = float(omega[i] * (omega[i + 1] / omega[i]) ** f)
         elif m_at >= 1.0:
             gm_lower = max(gm_lower, 1.0 / m_at)
-    # the closed-loop gain two decades below the grid stands for the DC gain: the state
-    # space's own dcgain() is ill-conditioned when the loop carries a rigid-body mode (a free
-    # integrator of position)
-    l_low = complex(fast_frequency_response(loop, [omega[0] / 100.0],
-                                            rtol=1e-7).complex.reshape(-1)[0])
     t0 = abs(l_low / (1.0 + l_low))
     below = np.nonzero(t < t0 / math.sqrt(2.0))[0]
     if below.size and below[0] > 0:

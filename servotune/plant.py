@@ -55,13 +55,14 @@ from .contact_kinds import (
     contact_kinds,
     register_contact_kind,
 )
-from .drive import Drive, drive_blocks
+from .drive import Drive, drive_blocks, winding_block
 from .friction.guideway import GuideWayFriction
 from .interconnect import connect
 from .structure.model import ModalModel, signal_name
 from .units import HZ_PER_RAD_S
 
 __all__ = ["Contact", "ContactKind", "ContactParameter", "friction_contact", "build_plant",
+           "build_open_plant",
            "loop_transfer", "CONTACT_KINDS", "CONTACT_PARAMETERS", "UnstableLoopError",
            "contact_kind", "contact_kinds", "register_contact_kind"]
 
@@ -316,8 +317,10 @@ def _listing(names) -> str:
     return " and ".join(words)
 
 
-def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None, pads):
-    """The python-control blocks of the axis and the work-piece DOFs present."""
+def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None, pads,
+            motor_of: Drive | None = None, extra_ports=()):
+    """The python-control blocks of the axis and the work-piece DOFs present (the structure
+    with the motor ports of ``drive`` or ``motor_of``; the controllers of ``drive`` only)."""
     contact = Contact.free() if contact is None else contact
     pads = list(pads)
     structure.index(pads)  # clear error for unknown pad DOFs
@@ -330,19 +333,85 @@ def _blocks(structure: ModalModel, drive: Drive | None, contact: Contact | None,
     have = set(structure.dofs)
     wp = [d for d in WP_DOFS if d in have]
     motor, outputs_extra = [], []
-    if drive is not None:
-        motor = [d for d in (drive.motor.rotor, drive.motor.stator) if d is not None]
+    ported = drive if drive is not None else motor_of
+    if ported is not None:
+        motor = [d for d in (ported.motor.rotor, ported.motor.stator) if d is not None]
         structure.index(motor)  # clear error for unknown motor DOFs
-        if drive.feedback == "linear" and drive.encoder not in wp + pads + motor:
-            structure.index(drive.encoder)
-            outputs_extra = [drive.encoder]
-    ports = wp + pads + motor
+        if ported.feedback == "linear" and ported.encoder not in wp + pads + motor:
+            structure.index(ported.encoder)
+            outputs_extra = [ported.encoder]
+    extra = [p for p in extra_ports if p not in wp + pads + motor]
+    ports = wp + pads + motor + extra
     mech = structure.to_state_space(inputs=ports, outputs=ports + outputs_extra,
                                     velocity_outputs=pads + motor, name="structure")
     blocks = [mech] + [contact.pad_block(p, len(pads)) for p in pads]
     if drive is not None:
         blocks += drive_blocks(drive) + motor_port(drive)
     return blocks, wp
+
+
+def build_open_plant(structure: ModalModel, drive: Drive, contact: Contact | None = None,
+                     pads=(), force_pads: bool = False,
+                     name: str = "open_axis") -> control.StateSpace:
+    """Return the axis driven by its motor voltage, without the controllers (continuous).
+
+    Structure, guide-way contacts, the motor winding and its port: what a digital drive
+    samples and drives through its zero-order hold (see :mod:`servotune.digital`).
+
+    Parameters
+    ----------
+    structure : ModalModel
+        The reduced structure.
+    drive : Drive
+        The drive (its motor, transmission and feedback; the controllers are not used).
+    contact : Contact, optional
+        Guide-way model (default: free).
+    pads : sequence of str
+        The pad DOFs where the contact acts.
+    force_pads : bool
+        With inputs ``f_<pad>`` [N] acting on the pad DOFs and outputs ``<pad>`` [m] (the
+        free pads of harmonic balance; the contact must be ``free``).
+    name : str
+        Name of the system.
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``voltage`` [V], the work-piece forces ``f_wp_*`` [N], ``t_dist`` [N m]
+        (then the pad forces); outputs ``current`` [A], ``motor_angle`` (rotor minus stator)
+        [rad], ``x_fb`` [m], the work-piece displacements ``wp_*`` [m], ``slide_x`` [m],
+        ``omega_motor`` [rad/s], ``torque`` [N m], then the pad displacements ``<pad>`` [m]
+        (with a contact acting at the pads, or ``force_pads``).
+
+    Raises
+    ------
+    ValueError
+        ``force_pads`` with a contact other than ``free``, or a contact without pads.
+    UnknownDofError
+        A pad, motor or encoder DOF the structure does not have.
+    """
+    contact = Contact.free() if contact is None else contact
+    pads = list(pads)
+    if force_pads:
+        if contact.pads != "free":
+            raise ValueError("force_pads needs a free contact (the pad forces are inputs)")
+        structure.index(pads)
+    blocks, wp = _blocks(structure, None, contact, pads, motor_of=drive,
+                         extra_ports=pads if force_pads else ())
+    rotor, stator = drive.motor.rotor, drive.motor.stator
+    angle_in = [signal_name(rotor)] + ([] if stator is None else [signal_name(stator)])
+    rel = [1.0] if stator is None else [1.0, -1.0]
+    blocks += [winding_block(drive.motor), *motor_port(drive),
+               control.ss([], [], [], [rel], inputs=angle_in, outputs=["motor_angle"],
+                          name="motor_angle")]
+    inputs = ["voltage", *[signal_name(d, "f_") for d in wp], "t_dist"]
+    outputs = ["current", "motor_angle", "x_fb", *[signal_name(d) for d in wp], "slide_x",
+               "omega_motor", "torque"]
+    if force_pads:
+        inputs += [signal_name(p, "f_") for p in pads]
+    if force_pads or contact.pads == "contact":
+        outputs += [signal_name(p) for p in pads]
+    return connect(blocks, inputs, outputs, name=name)
 
 
 def build_plant(structure: ModalModel, drive: Drive | None = None, contact: Contact | None = None,

@@ -75,9 +75,9 @@ def inputs_table(job) -> Table:
         else:
             rows.append(("drive", f"sampled: current {s.current_period * 1e6:g} us, velocity "
                          f"{s.velocity_period * 1e6:g} us, position {s.position_period * 1e3:g} ms",
-                         f"delays: current {s.current_delay * 1e6:.0f} us, velocity "
-                         f"{(s.velocity_delay + s.speed_measurement_delay) * 1e6:.0f} us, "
-                         f"position {s.position_delay * 1e3:.2g} ms"))
+                         f"modelled as the sampled-data system: voltage held, outputs "
+                         f"applied {s.computation_delay} period(s) after sampling, PI by "
+                         f"{s.integral_rule.replace('_', ' ')}, speed from the angle difference"))
         if drive.limits is not None:
             rows.append(("thrust", f"{drive.thrust_peak / 1e3:.3g} kN peak, "
                          f"{drive.thrust_continuous / 1e3:.3g} kN continuous",
@@ -146,7 +146,8 @@ def design_table(job) -> Table:
     if not r.before.stable:
         bad = [m.model.name for m in r.before.models if not m.stable]
         notes.append("the initial design is unstable in: " + ", ".join(bad)
-                     + (" (with the digital drive's delays)" if r.problem.drive is not None
+                     + (" (as the sampled-data system the digital drive is)"
+                        if r.problem.drive is not None
                         and not r.problem.drive.digital.is_continuous else ""))
         if r.start is not None and r.start != r.initial:
             notes.append(f"the tuning started from a softer velocity loop: Kp = "
@@ -259,7 +260,10 @@ def loops_table(job) -> Table | None:
     if r.stats.current_loop_bandwidth_hz:
         notes.append(f"current loop bandwidth {r.stats.current_loop_bandwidth_hz:.4g} Hz "
                      "(rotor held)")
-    return Table(f"Loops ({ref or 'reference model'}; margins include the drive's delays)",
+    sampled = r.problem.drive is not None and not r.problem.drive.digital.is_continuous
+    how = ("margins of the sampled-data loops, each at its controller's rate" if sampled
+           else "continuous loops")
+    return Table(f"Loops ({ref or 'reference model'}; {how})",
                  ("", "before", "after"), tuple(rows), tuple(notes))
 
 

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .frequency import port_compliance
+from .closed_loop import axis_compliance
 from .simulate.contact import LuGreFriction
 from .simulate.result import SimulationError
 from .simulate.scenario import constant_speed, planned_sweep, sweep_plan
@@ -516,7 +516,7 @@ def _regime_resonances(problem, designs, regime, omega):
         for m in problem.regimes:
             if m.regime != regime:
                 continue
-            h = port_compliance(problem.structure, omega, drive, m.contact(design.c),
+            h = axis_compliance(problem.structure, omega, drive, m.contact(design.c),
                                 problem.pads)[0]
             out += predicted_resonances(omega, h)
     return out

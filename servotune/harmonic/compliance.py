@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..blas import one_thread
-from ..frequency import port_compliance
+from ..closed_loop import axis_compliance
 from ..friction.lugre import sliding_linearisation
 from ..plant import Contact
 from ..units import HZ_PER_RAD_S
@@ -387,7 +387,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
         :func:`~servotune.friction.periodic.lugre_periodic_force` with its exact Jacobian.
     references : bool
         Also the linear references (presliding, viscous-only and, when ``speed > 0``, sliding
-        at ``speed``), by :func:`servotune.frequency.port_compliance` on 901 frequencies.
+        at ``speed``), by :func:`servotune.closed_loop.axis_compliance` on 901 frequencies.
     describing : bool
         Also the describing-function curves (H = 1).
     progress : callable, optional
@@ -449,7 +449,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
         if speed > 0.0:
             models["sliding"] = Contact.sliding(sliding_linearisation(p, speed), speed)
         for name, contact in models.items():
-            refs[name] = (omega, np.abs(port_compliance(setup.structure, omega, setup.drive,
+            refs[name] = (omega, np.abs(axis_compliance(setup.structure, omega, setup.drive,
                                                         contact, setup.pads)[0]))
     return NonlinearCompliance(speed=speed, curves=tuple(curves), describing=tuple(df),
                                references=refs, settings=settings, axis=setup.name)

@@ -14,7 +14,7 @@ Jobs are the top-level :func:`run_trial` with plain, picklable data (the axis se
 
 The remarks are checked by :func:`check_remarks` against independent linear predictions: the
 closed-loop compliance peak with the pads locked (stiction at low force) and with viscous pads
-(:func:`servotune.frequency.port_compliance`), and the steady-state friction F_ss(v) times the
+(:func:`servotune.closed_loop.axis_compliance`), and the steady-state friction F_ss(v) times the
 distance travelled in the window (:func:`servotune.friction.steady_state_friction`).
 """
 
@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..frequency import peak, port_compliance
+from ..closed_loop import axis_compliance
+from ..frequency import peak
 from ..friction.lugre import steady_state_friction
 from ..plant import Contact
 from ..units import HZ_PER_RAD_S
@@ -185,7 +186,7 @@ def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
 
     Pads locked (stiction at low force), LuGre presliding (spring sigma0, damper
     sigma1 + sigma2) and viscous-only pads, on 2000 points over the band
-    (:func:`servotune.frequency.port_compliance`).
+    (:func:`servotune.closed_loop.axis_compliance`).
 
     Parameters
     ----------
@@ -205,7 +206,7 @@ def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
     for key, contact in (("locked", Contact.locked()),
                          ("presliding", Contact.stiction(p.sigma0, p.sigma1, p.sigma2)),
                          ("viscous", Contact.viscous(setup.viscous))):
-        h = port_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
+        h = axis_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
         mag, w = peak(omega, h)
         out[key] = {"resonance_hz": w * HZ_PER_RAD_S, "compliance_m_per_n": mag}
     return out

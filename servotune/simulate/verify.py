@@ -3,7 +3,7 @@
 A design (guide-way damping C, Kv, velocity Kp and Ti; :class:`servotune.tuning.Design`) is
 tuned on linear models. :func:`verify_design` simulates it with LuGre friction at the pads under
 sine sweeps standing still, and compares each sweep's resonance and peak oscillation per force
-with four linear predictions of the closed loop (:func:`servotune.frequency.port_compliance`):
+with four linear predictions of the closed loop (:func:`servotune.closed_loop.axis_compliance`):
 
 * ``locked``: pads held rigidly;
 * ``presliding``: pads on the LuGre presliding contact (spring sigma0, damper sigma1 + C), the
@@ -27,8 +27,9 @@ import math
 import control
 import numpy as np
 
+from ..closed_loop import axis_compliance
 from ..drive import PIController
-from ..frequency import peak, port_compliance
+from ..frequency import peak
 from ..friction.equivalent import describing_function
 from ..plant import Contact
 from ..units import HZ_PER_RAD_S
@@ -90,7 +91,7 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
     Each force gives one sine sweep (:func:`servotune.simulate.scenario.sine_sweep`), standing
     still; its envelope from 10 % of the duration on gives the resonance and peak, and the
     pads' envelopes at the resonance the pad amplitude. The predictions are peaks of
-    :func:`servotune.frequency.port_compliance` on 3000 points over the swept band. A
+    :func:`servotune.closed_loop.axis_compliance` on 3000 points over the swept band. A
     prediction agrees when the simulated resonance lies within ``freq_tol`` and the peak
     within ``peak_tol`` of it (relative).
 
@@ -124,7 +125,7 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
     omega = 2 * math.pi * np.linspace(f_start_hz, f_end_hz, 3000)
 
     def predict(contact):
-        h = port_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
+        h = axis_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
         mag, w = peak(omega, h)
         return {"resonance_hz": w * HZ_PER_RAD_S, "peak_m_per_n": mag}
 

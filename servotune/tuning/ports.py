@@ -12,11 +12,13 @@ delays) is *data*: one column per (frequency, model).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import frequency
+from ..digital import cascade
 from ..drive import cascade_response
 from .problem import Design, TuningProblem
 
@@ -76,7 +78,121 @@ class _Cx:
         return np.asarray(self.re) + 1j * np.asarray(self.im)
 
 
-DRIVE_PARTS = ("forward", "winding", "measurement", "position")
+DRIVE_PARTS = ("forward", "winding")
+#: The digital drive's parts at a frequency w (design-independent; see :func:`sampled_parts`).
+SAMPLED_PARTS = ("h0", "k_ci", "k_ct", "dv_m", "dv", "qv", "hold_v", "hold_p", "dp")
+#: Per model and frequency: the zero-order hold's aliases of the sampled current, angle and
+#: position per voltage, and the corrections of the lifts beyond their first term.
+CORRECTIONS = ("a_i", "a_phi", "a_x", "d_vphi", "d_vx", "d_px")
+
+
+def is_sampled(problem: TuningProblem) -> bool:
+    """Whether the problem's drive is digital (a sampled-data loop)."""
+    return problem.drive is not None and not problem.drive.digital.is_continuous
+
+
+def sampled_parts(drive, omega: np.ndarray) -> dict:
+    """The digital drive's parts at angular frequencies ``omega`` (complex arrays).
+
+    ``h0`` the zero-order hold's fundamental over the current period; ``k_ci``, ``k_ct`` the
+    current controller's voltage per sampled current and per held torque set-point (from
+    :func:`servotune.digital.digital_controller`); ``dv_m = z_v^-d M(z_v)`` (delay and speed
+    measurement: backward difference and filter), ``dv = z_v^-d`` and ``qv`` the integral factor
+    of the velocity PI, ``C_v = Kp (1 + qv / Ti)``; ``hold_v``, ``hold_p`` the fundamentals
+    ``B_N(w)/N`` of the velocity and position controllers' holds; ``dp = z_p^-d``, set to 0
+    above the position controller's Nyquist frequency (there the position loop's rows are
+    void: its response repeats).
+    """
+    from ..digital import digital_controller
+    from ..digital.sampled import _box, hold_fundamental
+
+    s = drive.sampling
+    ctl = digital_controller(drive)
+    n_v, n_p = s.multiples()
+    t, tv, tp = s.current_period, s.velocity_period, s.position_period
+    d = s.computation_delay
+    z = np.exp(1j * omega * t)
+    zv = np.exp(1j * omega * tv)
+    zp = np.exp(1j * omega * tp)
+    m = (1.0 - 1.0 / zv) / tv
+    if s.speed_filter > 0.0:
+        a = math.exp(-tv / s.speed_filter)
+        m = m * (1.0 - a) / (1.0 - a / zv)
+    qv = tv / (zv - 1.0) if s.integral_rule == "forward_euler" else \
+        0.5 * tv * (zv + 1.0) / (zv - 1.0)
+    dp = np.where(omega < math.pi / tp * (1.0 - 1e-9), zp ** (-d), 0.0)
+    return {"h0": hold_fundamental(omega, t), "k_ci": ctl.response("current", "current", z),
+            "k_ct": ctl.response("current", "torque_set", z), "dv_m": zv ** (-d) * m,
+            "dv": zv ** (-d), "qv": qv, "hold_v": _box(omega, t, n_v) / n_v,
+            "hold_p": _box(omega, tv, n_p) / n_p, "dp": dp}
+
+
+_AXES: dict = {}
+
+
+def _reference_axes(problem: TuningProblem, reference: Design) -> list:
+    """The sampled-data axes of every regime model at ``reference`` (a few kept: the tuning
+    asks for the same ones at every grid)."""
+    from ..digital import SampledAxis
+
+    key = (id(problem), reference)
+    kept = _AXES.get(key)
+    if kept is not None and kept[0] is problem:
+        return kept[1]
+    drive = problem.drive_for(reference)
+    axes = [SampledAxis(problem.structure, drive,
+                        model.contact(reference.c) if problem.pads else None, problem.pads)
+            for model in problem.regimes]
+    if len(_AXES) >= 8:
+        _AXES.pop(next(iter(_AXES)))
+    _AXES[key] = (problem, axes)
+    return axes
+
+
+def sampled_corrections(problem: TuningProblem, omega: np.ndarray, reference: Design,
+                        pairs: dict, alpha: dict, lam: np.ndarray, zfix: np.ndarray,
+                        parts: dict) -> np.ndarray:
+    """The per-model corrections of the port model of a digital drive, exact at ``reference``.
+
+    The port model evaluates the zero-order-hold plant by its first term, ``h0 P(jw)``, and
+    each lift by its first term, ``(B_N(w)/N) G(w)``; the corrections are what the exact
+    sampled-data model (:class:`servotune.digital.SampledAxis`) adds at ``reference``: the
+    hold's aliases (which do not depend on the design: checked to 1e-8 relative on the bundled
+    axis over C x 3) and the lifts' other terms (which do, a little: the position loop's
+    sensitivity moves by 1e-5 at most when they are dropped altogether). So the port model
+    equals the exact one at the reference design and stays within those amounts elsewhere;
+    :func:`servotune.tuning.verify.verify` checks the design on the exact model.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex, shape (models, len(CORRECTIONS), K).
+    """
+    drive = problem.drive_for(reference)
+    axes = _reference_axes(problem, reference)
+    out = np.zeros((len(problem.regimes), len(CORRECTIONS), omega.size), dtype=complex)
+    numeric = _NumericPorts(PortData(omega, pairs, alpha, lam, len(problem.pads),
+                                     {k: v for k, v in parts.items()}, zfix, None, True))
+    plant = {k: v.value() for k, v in _plant_parts(
+        problem, numeric, reference.c if problem.pads else 0.0).items()}
+    below = omega < math.pi / drive.sampling.position_period * (1.0 - 1e-9)
+    for m, sa in enumerate(axes):
+        g = sa.zoh_response(omega)
+        h0 = parts["h0"]
+        out[m, 0] = g[0] - h0 * plant["i_u"][m]
+        out[m, 1] = g[1] - h0 * plant["phi_u"][m]
+        out[m, 2] = g[2] - h0 * plant["x_u"][m]
+        if sa.n_v > 1:
+            cur = sa._current(omega)
+            vel = sa._velocity(omega)
+            out[m, 3] = vel.g_vphi - parts["hold_v"] * cur.phi_t
+            out[m, 4] = vel.g_vx - parts["hold_v"] * cur.x_t
+        if below.any():
+            w = omega[below]
+            vel = sa._velocity(w)
+            pos = sa._position(w)
+            out[m, 5, below] = pos.g_px - parts["hold_p"][below] * vel.x_omega
+    return out
 
 
 def _port_vectors(problem: TuningProblem) -> tuple[list[str], dict]:
@@ -124,8 +240,10 @@ class PortData:
     alpha: dict       # (a, b) -> (K, n_pads) complex
     lam: np.ndarray   # (K, n_pads)
     n_pads: int
-    drive: dict | None     # DRIVE_PARTS -> (K,) complex
+    drive: dict | None     # DRIVE_PARTS or SAMPLED_PARTS -> (K,) complex
     zfix: np.ndarray  # (M, K) complex, contact impedance without C (axis total)
+    corrections: np.ndarray | None = None  # (M, len(CORRECTIONS), K) complex (sampled drive)
+    sampled: bool = False
 
     @property
     def n_models(self) -> int:
@@ -140,7 +258,7 @@ class PortData:
         for i in range(self.n_pads):
             out += [self.lam[:, i].real, self.lam[:, i].imag]
         if self.drive is not None:
-            for name in DRIVE_PARTS:
+            for name in (SAMPLED_PARTS if self.sampled else DRIVE_PARTS):
                 out += [self.drive[name].real, self.drive[name].imag]
         return np.array(out)
 
@@ -152,6 +270,8 @@ class PortData:
         blocks = []
         for m in (range(self.n_models) if models is None else models):
             block = [common, self.zfix[m].real[None], self.zfix[m].imag[None]]
+            if self.sampled:
+                block += [self.corrections[m].real, self.corrections[m].imag]
             if extra is not None and extra.shape[1]:
                 block.append(np.repeat(extra[m][:, None], k, axis=1))
             blocks.append(np.vstack(block))
@@ -178,9 +298,17 @@ class SymbolicPorts:
                 self.modes[(a, b)] = [cx() for _ in range(self.n_pads)]
         self.lam = [cx() for _ in range(self.n_pads)]
         self.drive = None
+        self.sampled = is_sampled(problem)
         if problem.drive is not None:
-            self.drive = {name: cx() for name in DRIVE_PARTS}
+            self.drive = {name: cx() for name in (SAMPLED_PARTS if self.sampled
+                                                  else DRIVE_PARTS)}
         self.zfix = cx()
+        self.corrections = None
+        if self.sampled:
+            re = [symbol[next(rows)] for _ in CORRECTIONS]
+            im = [symbol[next(rows)] for _ in CORRECTIONS]
+            self.corrections = {k: _Cx(a, b) for k, a, b in zip(CORRECTIONS, re, im,
+                                                                 strict=True)}
         self.extra = [symbol[next(rows)] for _ in range(n_extra)]
         if next(rows, None) is not None:
             raise ValueError("port data rows do not match the problem")
@@ -189,7 +317,10 @@ class SymbolicPorts:
     def size(problem: TuningProblem, n_extra: int = 0) -> int:
         _, vec = _port_vectors(problem)
         n = 1 + len(vec) ** 2 * 2 * (1 + len(problem.pads)) + 2 * len(problem.pads)
-        return n + (2 * len(DRIVE_PARTS) if problem.drive is not None else 0) + 2 + n_extra
+        if problem.drive is not None:
+            n += 2 * (len(SAMPLED_PARTS) + len(CORRECTIONS) if is_sampled(problem)
+                      else len(DRIVE_PARTS))
+        return n + 2 + n_extra
 
     def pair(self, a: str, b: str) -> _Cx:
         return self.pairs[(a, b)]
@@ -213,6 +344,11 @@ class _NumericPorts:
         self._data = data
         self.zfix = _Cx.of(data.zfix)
         self.drive = None if data.drive is None else {k: tile(v) for k, v in data.drive.items()}
+        self.sampled = data.sampled
+        self.corrections = None
+        if data.sampled and data.corrections is not None:
+            self.corrections = {k: _Cx.of(data.corrections[:, i])
+                                for i, k in enumerate(CORRECTIONS)}
         self._tile = tile
 
     def pair(self, a: str, b: str) -> _Cx:
@@ -223,8 +359,10 @@ class _NumericPorts:
                 self._tile(self._data.lam[:, i]))
 
 
-def port_data(problem: TuningProblem, omega: np.ndarray, exact_delays: bool = True) -> PortData:
-    """The port data of a problem on a grid (see :class:`PortData`)."""
+def port_data(problem: TuningProblem, omega: np.ndarray,
+              reference: Design | None = None) -> PortData:
+    """The port data of a problem on a grid (see :class:`PortData`); with a digital drive the
+    corrections are exact at ``reference`` (default the initial design)."""
     omega = np.asarray(omega, dtype=float)
     dofs, vec = _port_vectors(problem)
     rec = frequency.modal_receptance(problem.structure, omega, dofs, dofs)  # (p, p, K)
@@ -248,12 +386,17 @@ def port_data(problem: TuningProblem, omega: np.ndarray, exact_delays: bool = Tr
                 right = np.einsum("kqp,kp->kq", u_inv, rec_b[b][:, pad_idx])
                 alpha[(a, b)] = left * right
     drive = None
-    if problem.drive is not None:
-        parts = cascade_response(problem.drive, 1j * omega, exact_delays=exact_delays)
-        drive = {"forward": parts.current_forward * parts.setpoint, "winding": parts.winding,
-                 "measurement": parts.speed_measurement, "position": parts.position_delay}
-        drive = {k: np.broadcast_to(v, omega.shape).astype(complex) for k, v in drive.items()}
     zfix = np.array([m.impedance(omega) for m in problem.regimes], dtype=complex)
+    if is_sampled(problem):
+        drive = {k: np.broadcast_to(v, omega.shape).astype(complex)
+                 for k, v in sampled_parts(problem.drive, omega).items()}
+        ref = problem.initial_design() if reference is None else reference
+        corr = sampled_corrections(problem, omega, ref, pairs, alpha, lam, zfix, drive)
+        return PortData(omega, pairs, alpha, lam, n_p, drive, zfix, corr, True)
+    if problem.drive is not None:
+        parts = cascade_response(problem.drive, 1j * omega)
+        drive = {"forward": parts.current_forward * parts.setpoint, "winding": parts.winding}
+        drive = {k: np.broadcast_to(v, omega.shape).astype(complex) for k, v in drive.items()}
     return PortData(omega, pairs, alpha, lam, n_p, drive, zfix)
 
 
@@ -282,22 +425,87 @@ def responses(problem: TuningProblem, data, design) -> dict:
     drive = problem.drive
     if drive is None:
         return out
+    if data.sampled:
+        return _sampled_responses(problem, data, design, s, rc)
     m = drive.motor
     parts = data.drive
     cv = design["kp"] * (1.0 + 1.0 / (s * design["ti"]))
     den = parts["winding"]
     a = parts["forward"] * cv
-    a_v = a * parts["measurement"]
     b = m.torque_constant * m.back_emf_constant
     p_phi = rc("e", "e")
     p_fb = rc("f", "e")
-    k_pos = parts["position"] * (design["kv"] / drive.ratio)
-    out["loop_velocity"] = a_v * s * p_phi / (den + b * s * p_phi)
-    out["loop_position"] = k_pos * a * p_fb / (den + (a_v + b) * s * p_phi)
-    torque = -(a * k_pos * rc("f", "wp") + (a_v + b) * s * rc("e", "wp")) / (
-        den + a * k_pos * p_fb + (a_v + b) * s * p_phi)
+    k_pos = design["kv"] / drive.ratio
+    out["loop_velocity"] = a * s * p_phi / (den + b * s * p_phi)
+    out["loop_position"] = k_pos * a * p_fb / (den + (a + b) * s * p_phi)
+    torque = -(a * k_pos * rc("f", "wp") + (a + b) * s * rc("e", "wp")) / (
+        den + a * k_pos * p_fb + (a + b) * s * p_phi)
     out["compliance"] = h_ww + rc("wp", "e") * torque
     return out
+
+
+def _coupling(data, c):
+    """The port coupling rc(a, b) of the contact with viscous C."""
+    s = _Cx(0.0 * data.omega, data.omega)
+    weights = []
+    if data.n_pads:
+        z = (data.zfix + s * c) / data.n_pads
+        weights = [z / (1.0 + z * data.mode("wp", "wp", i)[1]) for i in range(data.n_pads)]
+
+    def rc(a, b):
+        out = data.pair(a, b)
+        for i, w in enumerate(weights):
+            out = out - w * data.mode(a, b, i)[0]
+        return out
+
+    return s, rc
+
+
+def _plant_parts(problem: TuningProblem, data, c, s=None, rc=None) -> dict:
+    """The continuous axis driven by its voltage, at the ports: current, angle and position
+    per voltage (``i_u``, ``phi_u``, ``x_u``), their responses to the work-piece force with the
+    voltage at zero (``i_f``, ``phi_f``, ``x_f``), and the work-piece displacement per force
+    and per voltage (``y_f``, ``y_u``). With the winding ``W = s L + R + kt ke s P_phi``::
+
+        i = (u - ke s R_c[e, wp] F) / W,   phi = kt P_phi i + R_c[e, wp] F, ...
+    """
+    if rc is None:
+        s, rc = _coupling(data, c)
+    m = problem.drive.motor
+    kt, ke = m.torque_constant, m.back_emf_constant
+    b = kt * ke
+    p_phi, p_fb = rc("e", "e"), rc("f", "e")
+    p_ew, p_fw, p_we = rc("e", "wp"), rc("f", "wp"), rc("wp", "e")
+    w = s * m.inductance + m.resistance + b * s * p_phi
+    out = {"i_u": 1.0 / w, "phi_u": kt * p_phi / w, "x_u": kt * p_fb / w,
+           "i_f": -ke * s * p_ew / w, "phi_f": p_ew * (s * m.inductance + m.resistance) / w,
+           "x_f": p_fw - b * s * p_fb * p_ew / w, "y_f": rc("wp", "wp") - b * s * p_we * p_ew / w,
+           "y_u": kt * p_we / w}
+    return out
+
+
+def _sampled_responses(problem: TuningProblem, data, design, s, rc) -> dict:
+    """The sampled-data responses (:mod:`servotune.digital.cascade`) from the port model, the
+    digital drive's parts and the per-model corrections."""
+    plant = _plant_parts(problem, data, None, s, rc)
+    parts, corr = data.drive, data.corrections
+    h0 = parts["h0"]
+    cur = cascade.current_level(h0 * plant["i_u"] + corr["a_i"],
+                                h0 * plant["phi_u"] + corr["a_phi"],
+                                h0 * plant["x_u"] + corr["a_x"], parts["k_ci"], parts["k_ct"])
+    cv = design["kp"] * (1.0 + parts["qv"] / design["ti"])
+    k_vphi = -(parts["dv_m"] * cv)
+    k_vomega = parts["dv"] * cv
+    vel = cascade.velocity_level(parts["hold_v"] * cur.phi_t + corr["d_vphi"],
+                                 parts["hold_v"] * cur.x_t + corr["d_vx"], k_vphi, k_vomega)
+    k_px = -(parts["dp"] * (design["kv"] / problem.drive.ratio))
+    pos = cascade.position_level(parts["hold_p"] * vel.x_omega + corr["d_px"], k_px)
+    h = cascade.fundamental(cur, vel, pos, k_ci=parts["k_ci"], k_vphi=k_vphi,
+                            k_vomega=k_vomega, k_px=k_px, i_f=plant["i_f"],
+                            phi_f=plant["phi_f"], x_f=plant["x_f"], y_f=plant["y_f"],
+                            y_u=plant["y_u"], h0=h0, hold_v=parts["hold_v"],
+                            hold_p=parts["hold_p"])
+    return {"compliance": h, "loop_velocity": vel.l_v, "loop_position": pos.l_p}
 
 
 def grid(lo: float, hi: float, n: int) -> np.ndarray:
@@ -310,7 +518,9 @@ class ResponseModel:
 
     The structure's port receptances, their pad eigen-decompositions and the contact impedances
     of the models are computed once; each call then costs a few vectorised complex operations.
-    Results have one row per regime model of the problem (``problem.regimes``).
+    Results have one row per regime model of the problem (``problem.regimes``). With a digital
+    drive the sampled-data model's corrections (:func:`sampled_corrections`) are made exact at
+    each design called with (``exact=True``, the default) or kept from ``reference``.
 
     Parameters
     ----------
@@ -318,9 +528,8 @@ class ResponseModel:
         Structure, pads, drive and regime models.
     omega : array_like
         Angular frequencies [rad/s] of the grid.
-    exact_delays : bool
-        The digital drive's delays as exact exponentials (True) or their Pade
-        approximations (see :func:`servotune.drive.cascade_response`).
+    reference : Design, optional
+        The design at which a digital drive's corrections are exact (default the initial one).
 
     Examples
     --------
@@ -335,24 +544,41 @@ class ResponseModel:
     5.813
     """
 
-    def __init__(self, problem: TuningProblem, omega, exact_delays: bool = True):
+    def __init__(self, problem: TuningProblem, omega, reference: Design | None = None):
         self.problem = problem
-        self.data = port_data(problem, np.asarray(omega, dtype=float), exact_delays)
+        self.reference = problem.initial_design() if reference is None else reference
+        self.data = port_data(problem, np.asarray(omega, dtype=float), self.reference)
         self._numeric = _NumericPorts(self.data)
 
     @property
     def omega(self) -> np.ndarray:
         return self.data.omega
 
-    def __call__(self, design: Design) -> dict:
+    def at(self, design: Design) -> ResponseModel:
+        """The model with a digital drive's corrections exact at ``design`` (itself when they
+        are, or when the drive is continuous)."""
+        if not self.data.sampled or design == self.reference:
+            return self
+        out = object.__new__(ResponseModel)
+        d = self.data
+        corr = sampled_corrections(self.problem, d.omega, design, d.pairs, d.alpha, d.lam,
+                                   d.zfix, d.drive)
+        out.problem, out.reference = self.problem, design
+        out.data = PortData(d.omega, d.pairs, d.alpha, d.lam, d.n_pads, d.drive, d.zfix, corr,
+                            True)
+        out._numeric = _NumericPorts(out.data)
+        return out
+
+    def __call__(self, design: Design, exact: bool = True) -> dict:
         """``{"omega", "compliance", "loop_velocity", "loop_position"}``; the responses as
-        complex arrays of shape (models, frequencies)."""
-        res = responses(self.problem, self._numeric, design.to_dict())
+        complex arrays of shape (models, frequencies). ``exact``: a digital drive's
+        corrections at ``design`` (else at the reference)."""
+        model = self.at(design) if exact else self
+        res = responses(self.problem, model._numeric, design.to_dict())
         return {"omega": self.data.omega, **{k: v.value() for k, v in res.items()}}
 
 
-def evaluate(problem: TuningProblem, design: Design, omega=None,
-             exact_delays: bool = True) -> dict:
+def evaluate(problem: TuningProblem, design: Design, omega=None) -> dict:
     """Return the port-coupled responses of a design on a frequency grid (numpy).
 
     Parameters
@@ -364,9 +590,6 @@ def evaluate(problem: TuningProblem, design: Design, omega=None,
     omega : array_like, optional
         Angular frequencies [rad/s]; default the union of 2000 log-spaced points over
         ``problem.requirements.band`` and 2000 over ``problem.requirements.loop_band``.
-    exact_delays : bool
-        The digital drive's delays as exact exponentials (True) or their Pade
-        approximations.
 
     Returns
     -------
@@ -374,9 +597,11 @@ def evaluate(problem: TuningProblem, design: Design, omega=None,
         ``omega`` [rad/s] and the complex responses of shape (models, frequencies):
         ``compliance`` (work-piece x/F [m/N]) and, with a drive, ``loop_velocity`` (the
         velocity loop's transfer with the position loop open) and ``loop_position`` (the
-        position loop's with the velocity loop closed).
+        position loop's with the velocity loop closed); a digital drive's as the sampled-data
+        system (each loop at its controller's rate; the position loop 0 above its Nyquist
+        frequency).
     """
     req = problem.requirements
     if omega is None:
         omega = np.unique(np.concatenate([grid(*req.band, 2000), grid(*req.loop_band, 2000)]))
-    return ResponseModel(problem, omega, exact_delays)(design)
+    return ResponseModel(problem, omega, design)(design)

@@ -36,11 +36,12 @@ import numpy as np
 
 from .. import frequency
 from ..blas import one_thread
+from ..digital import SampledAxis
 from ..drive import current_loop_bandwidth
 from ..plant import build_plant
 from ..units import HZ_PER_RAD_S
 from .nlp import Kernels, Solution, Solver, gate_parameters
-from .ports import ResponseModel, grid, port_data
+from .ports import ResponseModel, grid, is_sampled, port_data
 from .problem import (
     Design,
     NoStableStartError,
@@ -132,6 +133,11 @@ def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
     """
     if problem.drive is None:
         return [True] * len(problem.regimes)
+    if is_sampled(problem):
+        drive = problem.drive_for(design)
+        return [SampledAxis(problem.structure, drive,
+                            model.contact(design.c) if problem.pads else None,
+                            problem.pads).is_stable() for model in problem.regimes]
     matrices = ClosedLoopMatrices.of(problem)
     if matrices.exact:
         return [frequency.is_stable_matrix(a) for a in matrices(design)]
@@ -348,14 +354,15 @@ class _Grids:
     band: np.ndarray
     loop: np.ndarray
     gates: np.ndarray
+    reference: Design
 
     def __post_init__(self):
         self.refresh()
 
     def refresh(self):
         cut = list(self.problem.cutting_models)
-        self.band_model = ResponseModel(self.problem, self.band)
-        self.loop_model = ResponseModel(self.problem, self.loop)
+        self.band_model = ResponseModel(self.problem, self.band, self.reference)
+        self.loop_model = ResponseModel(self.problem, self.loop, self.reference)
         self.band_rows = self.band_model.data.rows(models=cut)
         self.loop_rows = self.loop_model.data.rows(self.gates)
 
@@ -377,7 +384,7 @@ def _moved_multipliers(old: Solver, old_grids: _Grids, new: Solver, new_grids: _
 
 def _scale_factors(problem: TuningProblem, design: Design) -> tuple[float, float]:
     """Peak and -min Re(mu G) of a design over the cutting models, for scaling."""
-    model = ResponseModel(problem, grid(*problem.requirements.band, 4000))
+    model = ResponseModel(problem, grid(*problem.requirements.band, 4000), design)
     h = model(design)["compliance"][list(problem.cutting_models)]
     mu = problem.chatter.mu if problem.chatter is not None else 1.0
     return float(np.abs(h).max()), float(max(-(mu * h.real).min(), 1e-30))
@@ -394,7 +401,7 @@ def _gamma(problem: TuningProblem, design: Design, model: ResponseModel) -> np.n
     """Position-loop bandwidth over Kv of each model, from the port model."""
     if problem.drive is None:
         return np.ones(len(problem.regimes))
-    lp = model(design)["loop_position"]
+    lp = model(design, exact=False)["loop_position"]
     return np.array([max(_bandwidth(model.omega, lp[m]) / design.kv, 1e-3)
                      for m in range(lp.shape[0])])
 
@@ -427,11 +434,12 @@ class _Fine:
     kernels: Kernels
     band: np.ndarray
     loop: np.ndarray
+    reference: Design
 
     def __post_init__(self):
         cut = list(self.problem.cutting_models)
-        self.band_rows = port_data(self.problem, self.band).rows(models=cut)
-        self.loop_data = port_data(self.problem, self.loop)
+        self.band_rows = port_data(self.problem, self.band, self.reference).rows(models=cut)
+        self.loop_data = port_data(self.problem, self.loop, self.reference)
 
     def evaluate(self, solver: Solver, design: Design, gates: np.ndarray):
         u = solver.values(design)
@@ -460,7 +468,8 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
     add_band = sorted({w for ws in band_cands.values() for w in ws})
     worst = 0.0
     if add_band:
-        exact = port_data(problem, np.array(add_band)).rows(models=list(problem.cutting_models))
+        exact = port_data(problem, np.array(add_band), grids.reference).rows(
+            models=list(problem.cutting_models))
         ev = kernels.evaluate("band", u, exact)
         ka = len(add_band)
         for r, row in enumerate(kernels.band_rows):
@@ -483,7 +492,7 @@ def _exchange_points(problem, kernels, fine: _Fine, solver: Solver, grids: _Grid
                                                 3 if vals.min() < 0 else 1))
         add_loop = sorted(cands)
         if add_loop:
-            exact = port_data(problem, np.array(add_loop)).rows(grids.gates)
+            exact = port_data(problem, np.array(add_loop), grids.reference).rows(grids.gates)
             ev = kernels.evaluate("loop", u, exact)
             for r in range(len(kernels.loop_rows)):
                 lo = kernels.loop_lower[r]
@@ -695,8 +704,9 @@ def exchange_grids(problem: TuningProblem, kernels: Kernels, grids: _Grids, gamm
         The design on the refined grids and how it was reached.
     """
     req = problem.requirements
-    fine = _Fine(problem, kernels, grid(*req.band, FINE_POINTS), grid(*req.loop_band, FINE_POINTS))
-    fine_loop_model = ResponseModel(problem, grid(*req.loop_band, 3000))
+    fine = _Fine(problem, kernels, grid(*req.band, FINE_POINTS), grid(*req.loop_band, FINE_POINTS),
+                 grids.reference)
+    fine_loop_model = ResponseModel(problem, grid(*req.loop_band, 3000), grids.reference)
     solver, warm = start_solver, None
     design, best, rounds, worst, failed, iterations = start.design, start, 0, math.inf, False, 0
     for rounds in range(1, max_exchange + 1):  # noqa: B007
@@ -711,7 +721,8 @@ def exchange_grids(problem: TuningProblem, kernels: Kernels, grids: _Grids, gamm
             break
         old_solver, old_grids = solver, grids
         grids = _Grids(problem, np.unique(np.concatenate([grids.band, add_band])),
-                       np.unique(np.concatenate([grids.loop, add_loop])), new_gates)
+                       np.unique(np.concatenate([grids.loop, add_loop])), new_gates,
+                       grids.reference)
         if warm is None or grids.band.size > warm.n_band or grids.loop.size > warm.n_loop:
             warm = Solver(problem, kernels, grids.band.size + EXCHANGE_ROOM[0],
                           grids.loop.size + EXCHANGE_ROOM[1], warm=True, callback=callback)
@@ -747,7 +758,8 @@ def predict(problem: TuningProblem, design: Design) -> Prediction:
     Prediction
         Peaks per cutting model and the limiting depth of cut.
     """
-    h = ResponseModel(problem, grid(*problem.requirements.band, 6000))(design)["compliance"]
+    h = ResponseModel(problem, grid(*problem.requirements.band, 6000),
+                      design)(design)["compliance"]
     cut = list(problem.cutting_models)
     b_crit = None
     if problem.chatter is not None:
@@ -849,9 +861,10 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     reference = start_set.designs[0]
     h0, s0 = _scale_factors(problem, reference)
     kernels = Kernels(problem, h0, s0)
-    gamma = _gamma(problem, reference, ResponseModel(problem, grid(*req.loop_band, 3000)))
+    gamma = _gamma(problem, reference,
+                   ResponseModel(problem, grid(*req.loop_band, 3000), reference))
     grids = _Grids(problem, grid(*req.band, problem.n_grid), grid(*req.loop_band, problem.n_grid),
-                   gate_parameters(problem, gamma, current_bw))
+                   gate_parameters(problem, gamma, current_bw), reference)
     # 2. the starts on the initial grids
     phase = solve_starts(problem, kernels, grids, start_set.designs, callback)
     n_starts = len(start_set.designs)

@@ -1,8 +1,9 @@
 """The independent check of a design: python-control state space, dense grids, every model.
 
 The optimiser works on port-coupled frequency responses on grids it refines itself; the check
-builds each regime model's closed loop as a state space (:func:`servotune.plant.build_plant`,
-with the digital drive's delays as Pade blocks), tests its poles, and evaluates compliance,
+builds each regime model's closed loop (:func:`servotune.closed_loop.closed_loop`: the
+python-control state space of a continuous drive, the exact sampled-data model of a digital
+one, :class:`servotune.digital.SampledAxis`), tests its stability, and evaluates compliance,
 chatter limit and both loops on grids offset from any the optimiser builds. Each requirement
 is then judged by :func:`requirement_checks`, one :class:`RequirementCheck` per requirement and
 model, so that the verdict, the JSON and the report all read the same list.
@@ -16,9 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import frequency
-from ..plant import UnstableLoopError, build_plant, loop_transfer
+from ..closed_loop import closed_loop
+from ..plant import UnstableLoopError
 from ..regimes import RegimeModel
-from ..structure.model import signal_name
 from ..units import HZ_PER_RAD_S
 from .constraint import CHECK_TOLERANCE, RequirementCheck, requirements
 from .problem import Design, TuningProblem
@@ -169,12 +170,14 @@ def _offset_grid(lo: float, hi: float, n: int) -> np.ndarray:
 def verify(problem: TuningProblem, design: Design) -> Performance:
     """Return the performance of a design in every regime model, on dense grids.
 
-    For each regime model the closed loop is built as a python-control state space
-    (:func:`servotune.plant.build_plant`, the digital drive's delays as Pade blocks) and its
-    poles tested; a stable cutting model gets its compliance peak on 6001 log-spaced points
-    over the requirements band and, with a chatter target, its critical depth; with a drive,
-    both loops are analysed on 8001 points over the loop band. The grids are offset by a third
-    of a step from any grid the optimiser builds. An unstable model is reported, not raised.
+    For each regime model the closed loop is built (:func:`servotune.closed_loop.closed_loop`:
+    the python-control state space of a continuous drive, the sampled-data system of a digital
+    one) and its stability tested (poles, or the multipliers over the slowest sample period);
+    a stable cutting model gets its compliance peak on 6001 log-spaced points over the
+    requirements band and, with a chatter target, its critical depth; with a drive, both loops
+    are analysed on 8001 points over the loop band (up to each loop's Nyquist frequency when
+    sampled). The grids are offset by a third of a step from any grid the optimiser builds. An
+    unstable model is reported, not raised.
 
     Parameters
     ----------
@@ -202,16 +205,15 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
     for model in problem.regimes:
         contact = model.contact(design.c) if problem.pads else None
         pads = problem.pads
-        plant = build_plant(problem.structure, drive, contact, pads)
+        axis = closed_loop(problem.structure, drive, contact, pads)
         try:
-            frequency.require_stable(plant, what=f"closed loop ({model.name})")
+            axis.require_stable(what=f"closed loop ({model.name})")
         except UnstableLoopError as exc:
             out.append(ModelPerformance(model, False, reason=str(exc)))
             continue
         peak = w_peak = b_crit = None
         if model.cutting:
-            h = frequency.compliance(plant, band, force=signal_name(problem.force, "f_"),
-                                     output=signal_name(problem.force))
+            h = axis.compliance(band, problem.force, [problem.force])[0]
             peak, w_peak = frequency.peak(band, h)
             if problem.chatter is not None:
                 from ..chatter import critical_depth
@@ -220,12 +222,8 @@ def verify(problem: TuningProblem, design: Design) -> Performance:
         velocity = position = None
         if drive is not None:
             try:
-                velocity = frequency.analyse_loop(
-                    loop_transfer(problem.structure, drive, contact, pads, "velocity"),
-                    loop_omega)
-                position = frequency.analyse_loop(
-                    loop_transfer(problem.structure, drive, contact, pads, "position"),
-                    loop_omega)
+                velocity = axis.analyse_loop("velocity", loop_omega)
+                position = axis.analyse_loop("position", loop_omega)
             except UnstableLoopError as exc:
                 out.append(ModelPerformance(model, False, peak, w_peak, b_crit,
                                             reason=f"{model.name}: {exc}"))
