@@ -10,7 +10,7 @@ force; its outputs the pad displacements and the work-piece displacement::
      +-----------------v-----------------+
      |  structure (modal sum)  <---- T   |      T = g_fb(jw) x_fb + g_rel(jw) phi
      |     |  x_fb, phi                  |      (the cascade: position, velocity and
-     |     +------> [drive cascade] -----+       current loops, exact delays)
+     |     +------> [drive cascade] -----+       current loops)
      +-----------------+-----------------+
                        v
               x_1 .. x_n (pads), x_wp
@@ -24,8 +24,9 @@ the one motor port, the closed loop is a rank-one update of the open structure::
 This is the coupling of :func:`servotune.frequency.port_compliance` with the pads left free
 (their friction is what harmonic balance supplies), evaluated cheaply at any frequency once the
 modal data and the cascade's polynomials are set up (the cascade as
-:func:`servotune.drive.cascade_response` gives it, with exact delays), so that a continuation
-can ask for it at every corrector step.
+:func:`servotune.drive.cascade_response` gives it), so that a continuation can ask for it at
+every corrector step. A digital drive is the sampled-data system it is
+(:class:`SampledPadReceptance`): its receptance is the fundamental of the sampled-data response.
 
 References
 ----------
@@ -43,9 +44,9 @@ import numba
 import numpy as np
 
 from ..drive import Drive
-from ..structure.model import ModalModel
+from ..structure.model import ModalModel, signal_name
 
-__all__ = ["PadReceptance", "pad_receptance"]
+__all__ = ["PadReceptance", "SampledPadReceptance", "pad_receptance"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,15 +179,95 @@ def _cascade_polynomials(drive: Drive) -> tuple:
     def poly(tf):
         return (np.asarray(tf.num[0][0], dtype=float), np.asarray(tf.den[0][0], dtype=float))
 
-    sampling = drive.digital
     return (poly(drive.current_loop.transfer_function()), poly(drive.torque_filter()),
-            poly(drive.velocity_loop.transfer_function()),
-            (sampling.current_delay, sampling.velocity_delay,
-             sampling.speed_measurement_delay, sampling.position_delay, sampling.speed_filter))
+            poly(drive.velocity_loop.transfer_function()), (0.0, 0.0, 0.0, 0.0, 0.0))
+
+
+class SampledPadReceptance:
+    """The receptance of :class:`PadReceptance` with a digital drive: the fundamental of the
+    sampled-data axis' response (:class:`servotune.digital.SampledAxis` with the pads free and
+    their forces as inputs; the aliases the drive's holds add are left out, as in the
+    compliance of the tuning: below 1e-6 of the fundamental on the bundled axis).
+
+    Parameters
+    ----------
+    structure : ModalModel
+        The structure with the pads free.
+    drive : Drive
+        A digital drive.
+    pads : tuple of str
+        The pad DOFs.
+    force_dof, output_dof : str
+        Work-piece DOFs of the force and of the displacement.
+    """
+
+    #: The table's range [Hz] and its points per decade (cubic splines of the real and
+    #: imaginary parts in log frequency; outside it the receptance is evaluated directly).
+    TABLE_HZ = (0.05, 3900.0)
+    TABLE_PER_DECADE = 1000
+
+    def __init__(self, structure: ModalModel, drive: Drive, pads, force_dof: str,
+                 output_dof: str):
+        from ..digital import SampledAxis
+        from ..plant import Contact
+
+        self.pads, self.force_dof, self.output_dof, self.drive = (tuple(pads), force_dof,
+                                                                  output_dof, drive)
+        self._axis = SampledAxis(structure, drive, Contact.free(), self.pads, force_pads=True)
+        self._inputs = [signal_name(p, "f_") for p in self.pads] + [signal_name(force_dof, "f_")]
+        self._outputs = [signal_name(p) for p in self.pads] + [signal_name(output_dof)]
+        self._table = None
+
+    @property
+    def n_pads(self) -> int:
+        return len(self.pads)
+
+    def exact(self, omega) -> np.ndarray:
+        """The receptance evaluated directly (no table), shape (n + 1, n + 1, K)."""
+        return self._axis.response(np.atleast_1d(np.asarray(omega, dtype=float)),
+                                   self._inputs, self._outputs)
+
+    def _spline(self):
+        if self._table is None:
+            import scipy.interpolate
+
+            lo, hi = (2 * np.pi * f for f in self.TABLE_HZ)
+            hi = min(hi, 0.99 * self._axis.nyquist("velocity"))
+            n = int(self.TABLE_PER_DECADE * np.log10(hi / lo)) + 1
+            grid = np.geomspace(lo, hi, n)
+            values = self.exact(grid)
+            self._table = (lo, hi, scipy.interpolate.CubicSpline(np.log(grid), values,
+                                                                 axis=-1))
+        return self._table
+
+    def __call__(self, omega) -> np.ndarray:
+        """The receptance at angular frequencies ``omega`` [rad/s] (> 0), shape
+        (n + 1, n + 1, K) as :meth:`PadReceptance.__call__`.
+
+        Harmonic balance asks for it at many frequencies: it is tabulated once (1000 points
+        per decade over :attr:`TABLE_HZ`, below the speed controller's Nyquist frequency) and
+        interpolated by cubic splines in log frequency (within 1e-6 of the direct evaluation
+        on the bundled axis, tests/test_digital_harmonic.py); outside the table it is
+        evaluated directly."""
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        if not np.all(np.isfinite(omega) & (omega > 0.0)):
+            raise ValueError("the receptance is asked at finite frequencies > 0 rad/s")
+        lo, hi, spline = self._spline()
+        inside = (omega >= lo) & (omega <= hi)
+        out = np.empty((self.n_pads + 1, self.n_pads + 1, omega.size), dtype=complex)
+        if inside.any():
+            out[:, :, inside] = spline(np.log(omega[inside]))
+        if (~inside).any():
+            out[:, :, ~inside] = self.exact(omega[~inside])
+        return out
+
+
+#: The sampled receptances made (their tables are the expensive part), a few kept.
+_SAMPLED: dict = {}
 
 
 def pad_receptance(structure: ModalModel, drive: Drive | None, pads, force_dof: str = "wp.x",
-                   output_dof: str | None = None) -> PadReceptance:
+                   output_dof: str | None = None) -> PadReceptance | SampledPadReceptance:
     """Set up the closed-loop receptance between pads and work piece.
 
     Parameters
@@ -225,6 +306,15 @@ def pad_receptance(structure: ModalModel, drive: Drive | None, pads, force_dof: 
     if not pads:
         raise ValueError("harmonic balance of the guide-way friction needs the pad DOFs")
     output_dof = force_dof if output_dof is None else output_dof
+    if drive is not None and not drive.digital.is_continuous:
+        key = (id(structure), drive, pads, force_dof, output_dof)
+        kept = _SAMPLED.get(key)
+        if kept is None or kept[0] is not structure:
+            if len(_SAMPLED) >= 4:
+                _SAMPLED.pop(next(iter(_SAMPLED)))
+            kept = _SAMPLED[key] = (structure, SampledPadReceptance(structure, drive, pads,
+                                                                    force_dof, output_dof))
+        return kept[1]
     eye = np.eye(structure.n)
 
     def col(name):

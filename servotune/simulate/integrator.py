@@ -70,7 +70,8 @@ import numpy as np
 import scipy.linalg
 
 __all__ = ["ModalForm", "modal_form", "StepWeights", "step_weights", "phi_functions",
-           "chunk_kernel", "integrate_chunk", "sum_of_squares", "MAX_LEVEL", "N_POWERS"]
+           "chunk_kernel", "controller_arrays", "integrate_chunk", "sum_of_squares",
+           "MAX_LEVEL", "N_POWERS"]
 
 MAX_LEVEL = 8          # steps are halved at most this many times (h/256)
 C1 = 1.0 / 3.0         # first Radau point (the second is 1)
@@ -423,11 +424,106 @@ def _no_remainder(component, v, z, p):
 _remainder = _no_remainder
 
 
+@numba.njit(cache=True)
+def _controller_update(k, xr, xm, samples, si, meas_re, meas_im, ref_cols, ctl_every, ctl_n,
+                       ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, g, tmp):
+    """The digital drive's controllers at fast sample k (levels slow to fast; see
+    :meth:`servotune.digital.DigitalController.step`): g = [measured, references, held]."""
+    nm = meas_re.shape[1]
+    n_ref = ref_cols.size
+    n_lev = ctl_every.size
+    for q in range(nm):
+        acc = 0.0
+        for i in range(xr.size):
+            acc += meas_re[i, q] * xr[i] - meas_im[i, q] * xm[i]
+        g[q] = acc
+    for q in range(n_ref):
+        g[nm + q] = samples[si, ref_cols[q]] if ref_cols[q] >= 0 else 0.0
+    for j in range(n_lev):
+        g[nm + n_ref + j] = ctl_held[j]
+    for j in range(n_lev):
+        if k % ctl_every[j] != 0:
+            continue
+        nj = ctl_n[j]
+        y = 0.0
+        for c in range(g.size):
+            y += ctl_d[j, c] * g[c]
+        for i in range(nj):
+            y += ctl_c[j, i] * ctl_x[j, i]
+        for i in range(nj):
+            acc = 0.0
+            for c in range(nj):
+                acc += ctl_a[j, i, c] * ctl_x[j, c]
+            for c in range(g.size):
+                acc += ctl_b[j, i, c] * g[c]
+            tmp[i] = acc
+        for i in range(nj):
+            ctl_x[j, i] = tmp[i]
+        ctl_held[j] = y
+        g[nm + n_ref + j] = y
+
+
+def controller_arrays(controller, data: dict, inputs, samples_per_step: int) -> tuple:
+    """The trailing arguments of the kernel for a digital drive's controllers (or none).
+
+    Parameters
+    ----------
+    controller : DigitalController or None
+        The controllers (None: no digital drive; the kernel then computes none).
+    data : dict
+        The prepared data of :func:`servotune.simulate.simulator.simulate` (``meas_re``,
+        ``meas_im``: the sampled outputs projected on the modes).
+    inputs : sequence of str
+        The known inputs of the linear part (``voltage`` and the references among them).
+    samples_per_step : int
+        Base steps per fast sample (0: none).
+
+    Returns
+    -------
+    tuple
+        ``ctl_every, ctl_n, ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, ctl_state, meas_re,
+        meas_im, ref_cols, volt_col, samples_per_step`` (the state arrays are updated in
+        place by the kernel).
+    """
+    inputs = list(inputs)
+    if controller is None:
+        z2, z3 = np.zeros((0, 1)), np.zeros((0, 1, 1))
+        return (np.zeros(0, np.int64), np.zeros(0, np.int64), z3, z3, z2, z2, z2,
+                np.zeros(0), np.full(1, -1, np.int64), np.zeros((1, 0)), np.zeros((1, 0)),
+                np.zeros(0, np.int64), -1, 0)
+    levels = controller.levels
+    n_lev = len(levels)
+    size = max(1, max(lv.a.shape[0] for lv in levels))
+    n_g = controller.n_inputs
+    a = np.zeros((n_lev, size, size))
+    b = np.zeros((n_lev, size, n_g))
+    c = np.zeros((n_lev, size))
+    d = np.zeros((n_lev, n_g))
+    for j, lv in enumerate(levels):
+        n = lv.a.shape[0]
+        a[j, :n, :n] = lv.a
+        b[j, :n] = lv.b
+        c[j, :n] = lv.c[0]
+        d[j] = lv.d[0]
+    if levels[-1].output != "voltage":
+        raise ValueError("the fastest controller must drive the voltage")
+    from ..digital import REFERENCES
+
+    refs = np.array([inputs.index(r) if r in inputs else -1 for r in REFERENCES], np.int64)
+    return (np.array([lv.every for lv in levels], np.int64),
+            np.array([lv.a.shape[0] for lv in levels], np.int64), a, b, c, d,
+            np.zeros((n_lev, size)), np.zeros(n_lev), np.full(1, -1, np.int64),
+            data["meas_re"], data["meas_im"], refs, inputs.index("voltage"),
+            int(samples_per_step))
+
+
 def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
                     but_re, but_im, brt_re, brt_im, cyt_re, cyt_im, prop_re, prop_im, alpha_re,
                     alpha_im, beta_re, beta_im, kmat, kerr, rparams, r_tol,
                     err_scale, tol, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads,
-                    cot_re, cot_im, dou, dor, rec_out, rec_energy, stats):
+                    cot_re, cot_im, dou, dor, rec_out, rec_energy, stats, ctl_every, ctl_n,
+                    ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, ctl_state, meas_re, meas_im,
+                    ref_cols, volt_col, samples_per_step):
     """Integrate the base steps n0..n1-1 (of length h) in place (the kernel's source).
 
     The compiled kernel of a friction law is :func:`chunk_kernel` ``(law.remainder())``: this
@@ -503,6 +599,15 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
         Recorded cumulative works [J]; filled in place.
     stats : (4,) numpy.ndarray of int64
         Counters, incremented in place.
+    ctl_every, ctl_n, ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, ctl_state, meas_re, meas_im,
+    ref_cols, volt_col, samples_per_step
+        A digital drive's controllers (:func:`controller_arrays`): at the start of every base
+        step that begins a fast sample (every ``samples_per_step`` base steps) the controllers
+        due are computed from the sampled outputs (``meas``, projected on the modes) and the
+        references (columns ``ref_cols`` of ``samples``), and the voltage (known input
+        ``volt_col``) is held over the step; ``ctl_state[0]`` is the position of the last
+        update (a rejected step is redone without a second update). ``samples_per_step`` 0:
+        no controller.
 
     Returns
     -------
@@ -540,14 +645,25 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
     prev_lev = -1                       # level of the previous step (-1: none in this chunk)
     pos = n0 * unit
     end = n1 * unit
+    n_lev = ctl_every.size
+    g_ctl = np.zeros(meas_re.shape[1] + ref_cols.size + n_lev)
+    tmp_ctl = np.zeros(max(1, ctl_x.shape[1]))
     while pos < end:
         lev = level
         span = 1 << (top - lev)
         s0 = pos * 3.0 / unit
         ds = 1.0 / (1 << lev)
+        if samples_per_step > 0 and pos % (unit * samples_per_step) == 0 \
+                and pos != ctl_state[0]:
+            ctl_state[0] = pos
+            _controller_update(pos // (unit * samples_per_step), xr, xm, samples,
+                               (pos * 3) // unit, meas_re, meas_im, ref_cols, ctl_every, ctl_n,
+                               ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, g_ctl, tmp_ctl)
         # known inputs projected on the modes at the four nodes
         for k in range(4):
             _u_into(samples, s0 + k * ds, un[k])
+            if volt_col >= 0:
+                un[k, volt_col] = ctl_held[n_lev - 1]
             for i in range(m):
                 bun_re[k, i] = 0.0
                 bun_im[k, i] = 0.0
@@ -827,7 +943,8 @@ def chunk_kernel(remainder=None):
     text = (f'"""Generated by servotune.simulate.integrator.chunk_kernel for '
             f'{module_name}.{func_name}."""\n\n'
             f"import math\n\nimport numba\nimport numpy as np\n\n"
-            f"from servotune.simulate.integrator import (C1, MAX_NEWTON, _FAST, _powers,\n"
+            f"from servotune.simulate.integrator import (C1, MAX_NEWTON, _FAST,\n"
+            f"                                          _controller_update, _powers,\n"
             f"                                          _solve_small, _u_into)\n"
             f"from {module_name} import {func_name} as _remainder\n\n\n"
             f"@numba.njit(cache=True, fastmath=_FAST)\n{source}")

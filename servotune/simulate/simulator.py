@@ -134,7 +134,11 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     step : float
         Base integration step [s] (default 2.5e-4 s, 40 steps per cycle at 100 Hz). The linear
         dynamics are exact for any step; the step resolves the excitation. Where the friction
-        needs it (break-away, reversals, stick-slip) steps are halved, down to step/256.
+        needs it (break-away, reversals, stick-slip) steps are halved, down to step/256. With a
+        digital drive the step is the largest whole fraction of the current controller's
+        period not above ``step`` (125 us for the default drive), so that every step starts
+        on a sample: the controllers are computed at their sample instants, their outputs held
+        in between (the motor voltage over each step).
     record_step : float
         Interval of the recorded histories [s], a whole multiple of ``step``.
     tolerance : float
@@ -179,6 +183,12 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     h = float(step)
     if not (math.isfinite(h) and h > 0):
         raise ValueError(f"step must be a positive number of seconds, got {step!r}")
+    sps = 0
+    if axis.drive is not None and not axis.drive.digital.is_continuous:
+        # a digital drive: the steps land on the current controller's samples
+        period = axis.drive.sampling.current_period
+        sps = max(1, math.ceil(period / h - 1e-9))
+        h = period / sps
     tolerance = float(tolerance)
     if not (math.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"tolerance must be a positive number, got {tolerance!r}")
@@ -199,7 +209,9 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     inputs = list(sig) + (["one"] if nonlinear else [])
     sysm = axis_system(axis.structure, axis.drive, axis.friction, axis.pads, scenario.speed,
                        inputs=inputs)
-    samples = np.column_stack([sig[s] if s in sig else np.ones_like(t_u) for s in sysm.inputs])
+    samples = np.column_stack([sig[s] if s in sig else (np.ones_like(t_u) if s == "one"
+                                                        else np.zeros_like(t_u))
+                               for s in sysm.inputs])
     samples = np.ascontiguousarray(samples) if samples.size else np.zeros((t_u.size, 0))
     data = _prepare(sysm, h, axis, scenario)
     nr = data["br"].shape[1]
@@ -256,6 +268,7 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
         for part in (a.real, a.imag))
     kernel_time = 0.0
     kernel = integrator.chunk_kernel(data["remainder"])
+    ctl = integrator.controller_arrays(sysm.controller, data, sysm.inputs, sps)
     for n0, n1 in itertools.pairwise(bounds):
         tk = time.perf_counter()
         out = rec[1 + n0 // record_every:1 + n1 // record_every]
@@ -265,7 +278,7 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
             *data["split"], w.kmat, w.kerr, rparams,
             data["r_tol"], data["err_scale"], tolerance, data["cpt_re"], data["cpt_im"],
             data["dpu"], data["dpr"], data["n_force"], data["force_idx"], n_pads_power,
-            data["cot_re"], data["cot_im"], data["dou"], data["dor"], out, out_w, stats)
+            data["cot_re"], data["cot_im"], data["dou"], data["dor"], out, out_w, stats, *ctl)
         kernel_time += time.perf_counter() - tk
         if done < n1 - n0 or not (np.all(np.isfinite(xr)) and np.all(np.isfinite(xm))):
             failed_at = n0 + done
@@ -287,7 +300,8 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
             "eigenvector_condition": float(data["condition"]), "wall_time_s": wall,
             "integration_time_s": kernel_time,
             "real_time_factor": (n_end * h) / wall if wall > 0 else math.inf,
-            "n_pads": n_pads_power}
+            "n_pads": n_pads_power,
+            "controller_samples_per_step": 0 if not sps else 1.0 / sps}
     result = SimulationResult(
         t=t_rec, signals=signals, work=rec_work[:n_keep].copy(),
         checkpoints=np.array(cps_t), checkpoint_work=np.array(cps_work),
@@ -347,7 +361,11 @@ def _prepare(sysm: AxisSystem, h: float, axis: NonlinearAxis, scenario: Scenario
     else:
         rparams, remainder, r_tol = np.zeros(1), None, 0.0
         err_scale = np.zeros(0)
-    return {"lam": form.lam, "vectors": vec, "condition": form.condition, "bu": bu, "br": br,
+    meas = (sysm.measured_rows @ vec if sysm.measured_rows is not None
+            else np.zeros((0, vec.shape[1]), dtype=complex))
+    return {"meas_re": np.ascontiguousarray(meas.T.real),
+            "meas_im": np.ascontiguousarray(meas.T.imag),
+            "lam": form.lam, "vectors": vec, "condition": form.condition, "bu": bu, "br": br,
             "cy": cy, "w": weights, "cpt_re": np.ascontiguousarray(cp.T.real),
             "cpt_im": np.ascontiguousarray(cp.T.imag), "dpu": dpu, "dpr": dpr,
             "n_force": n_force, "force_idx": np.array(sysm.wp_force_inputs, dtype=np.int64),

@@ -26,14 +26,16 @@ import control
 import numpy as np
 import scipy.linalg
 
-from ..drive import Drive, drive_blocks
+from ..digital import MEASURED, DigitalController, digital_controller
+from ..drive import Drive, drive_blocks, winding_block
 from ..plant import WP_DOFS, motor_port
 from ..structure.model import ModalModel, signal_name
 from .contact import PadFriction
 
 __all__ = ["AxisSystem", "axis_system", "KNOWN_INPUTS"]
 
-KNOWN_INPUTS = ("x_ref", "v_ref", "a_ref", "f_wp_x", "f_wp_y", "f_wp_z", "t_dist", "one")
+KNOWN_INPUTS = ("x_ref", "v_ref", "a_ref", "f_wp_x", "f_wp_y", "f_wp_z", "t_dist", "one",
+                "voltage")
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +77,14 @@ class AxisSystem:
         ``v^T D v = |damping_rows X|^2``.
     energy_rows : (2 n_dof, n) array
         ``1/2 v^T M v + 1/2 x^T K x = 1/2 |energy_rows X|^2``.
+    controller : DigitalController or None
+        The digital drive's controllers (None for a continuous drive or none): the linear
+        part is then the axis driven by its motor voltage (the known input ``voltage``, held
+        between the controller's samples), and the controllers are computed at their sample
+        instants by the integrator.
+    measured_rows : (3, n) array
+        The sampled outputs (:data:`servotune.digital.MEASURED`: current, rotor angle,
+        position feedback) from X (no feed-through), for the controller.
     """
 
     system: control.StateSpace
@@ -96,6 +106,8 @@ class AxisSystem:
     damping_rows: np.ndarray
     energy_rows: np.ndarray
     structure: ModalModel = field(repr=False)
+    controller: DigitalController | None = None
+    measured_rows: np.ndarray | None = None
 
     @property
     def n_states(self) -> int:
@@ -164,15 +176,33 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     mech = structure.to_state_space(inputs=ports, outputs=ports + extra,
                                     velocity_outputs=ports, name="structure")
     blocks = [mech] + [friction.pad_block(p, len(pads), speed) for p in pads]
-    if drive is not None:
+    sampled = drive is not None and not drive.digital.is_continuous
+    controller = None
+    if sampled:
+        # the axis driven by its held motor voltage; the controllers run at their samples
+        controller = digital_controller(drive)
+        rel = [1.0] if drive.motor.stator is None else [1.0, -1.0]
+        angles = [signal_name(d) for d in motor]
+        blocks += [winding_block(drive.motor), *motor_port(drive),
+                   control.ss([], [], [], [rel], inputs=angles, outputs=["motor_angle"],
+                              name="motor_angle"),
+                   control.ss([], [], [], [[1.0, -1.0]], inputs=["x_ref", "x_fb"],
+                              outputs=["following_error"], name="following_error"),
+                   # the velocity and acceleration references reach only the controllers
+                   control.ss([], [], [], [[0.0, 0.0]], inputs=["v_ref", "a_ref"],
+                              outputs=["references_read_by_the_controllers"],
+                              name="references")]
+    elif drive is not None:
         blocks += drive_blocks(drive) + motor_port(drive)
     available = (["x_ref", "v_ref", "a_ref"] if drive is not None else []) + [
         signal_name(d, "f_") for d in wp] + (["t_dist"] if drive is not None else []) + (
-        ["one"] if nonlinear else [])
+        ["one"] if nonlinear else []) + (["voltage"] if sampled else [])
     if inputs is None:
         inputs = available
     else:
         inputs = list(dict.fromkeys(inputs))
+        if sampled:   # the controllers read the references and drive the voltage
+            inputs = list(dict.fromkeys([*inputs, "x_ref", "v_ref", "a_ref", "voltage"]))
         unknown = [s for s in inputs if s not in available]
         if unknown:
             raise ValueError(f"inputs {unknown} are not inputs of this axis; it has {available}")
@@ -181,6 +211,8 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     outputs = [signal_name(d) for d in wp]
     if drive is not None:
         outputs += ["slide_x", "omega_motor", "following_error", "torque", "current"]
+    if sampled:
+        outputs += ["motor_angle", "x_fb"]
     pad_blocks = blocks[1:1 + len(pads)]
     for p, block in zip(pads, pad_blocks, strict=True):
         # the pad, then the friction block's outputs but the force on the DOF (F_, states)
@@ -247,10 +279,16 @@ def axis_system(structure: ModalModel, drive: Drive | None, friction: PadFrictio
     damping_rows = _factor_psd(structure.damping) @ sel_v
     energy_rows = np.vstack([np.linalg.cholesky(structure.mass).T @ sel_v,
                              _factor_psd(structure.stiffness) @ sel_x])
+    measured = None
+    if sampled:
+        measured = np.array([out_row(name)[0] for name in MEASURED])
+        feed = np.array([np.concatenate(out_row(name)[1:]) for name in MEASURED])
+        if np.abs(feed).max(initial=0.0) > 0.0:
+            raise ValueError("the sampled outputs of the axis have a feed-through")
     return AxisSystem(
         system=sys, inputs=tuple(inputs), outputs=tuple(outputs), pads=pads, nonlinear=nonlinear,
         pad_velocity=pad_v, pad_state=pad_z, remainder_velocity=rem_v,
         remainder_state=rem_z, spring_rows=spring_rows, force_rows=force_rows, force_du=force_du,
         force_dr=force_dr, wp_velocity=wp_v, wp_force_inputs=force_inputs,
         motor_rows=motor_rows, damping_rows=damping_rows, energy_rows=energy_rows,
-        structure=structure)
+        structure=structure, controller=controller, measured_rows=measured)
