@@ -41,6 +41,7 @@ Every error names the file, the field and what to do about it.
 
 from __future__ import annotations
 
+import itertools
 import math
 import tomllib
 from collections.abc import Mapping
@@ -57,6 +58,7 @@ from .drive import (
     NotchFilter,
     PIController,
     Sampling,
+    TorqueSpeedCurve,
     kv_from_m_per_min_per_mm,
 )
 from .friction.guideway import GuideWayFriction
@@ -732,7 +734,7 @@ def _drive(data, structure, file, defaults) -> Drive | None:
     # [drive.motor] checked here so that its messages name the section as the file does;
     # torque_max, the older name of torque_peak, is accepted but not offered
     motor_optional = ("rotor", "stator", "rotor_inertia", "torque_peak", "torque_continuous",
-                      "speed_max_rpm")
+                      "speed_max_rpm", "rated_speed_rpm", "torque_speed")
     if not isinstance(table["motor"], dict):
         raise _err(file, "[drive.motor]", f"got {table['motor']!r}", "make [drive.motor] a table")
     motor_unknown = sorted(set(table["motor"]) - set(_MOTOR_KEYS) - set(motor_optional)
@@ -783,7 +785,7 @@ def _drive(data, structure, file, defaults) -> Drive | None:
         lowpass = (LowPassFilter(filters["lowpass_hz"]) if "lowpass_hz" in filters else None)
         notch = (NotchFilter(filters["notch_hz"], filters.get("notch_width", 0.5),
                              filters.get("notch_depth", 0.1)) if "notch_hz" in filters else None)
-        limits = _limits(motor, file)
+        limits = _limits(motor, file, defaults)
         sampling = _sampling(table, file, defaults)
         return Drive(
             motor=Motor(*(_number(motor, k, file, "drive.motor", low=_MOTOR_RANGES[k][0],
@@ -815,8 +817,18 @@ def _drive(data, structure, file, defaults) -> Drive | None:
         raise _err(file, "[drive]", str(exc), "fix the value") from None
 
 
-def _limits(motor, file) -> DriveLimits | None:
-    """Torque and speed limits of ``[drive.motor]`` (None when no torque limit is given)."""
+_TORQUE_SPEED_KEYS = ("speed_rpm", "peak", "continuous")
+_TORQUE_SPEED_EXAMPLE = ("torque_speed = {speed_rpm = [0, 3000, 4500], peak = [90, 90, 60], "
+                         "continuous = [27, 27, 18]}")
+
+
+def _limits(motor, file, defaults) -> DriveLimits | None:
+    """Torque and speed limits of ``[drive.motor]`` (None when no torque limit is given).
+
+    The torques over speed: ``torque_speed`` (a table), else the rated torques constant up to
+    ``rated_speed_rpm`` and falling at constant power above it, else constant up to
+    ``speed_max_rpm`` (the default, stated in ``defaults``).
+    """
     if "torque_max" in motor and "torque_peak" in motor:
         raise _err(file, "[drive.motor]", "both torque_max and torque_peak are given",
                    "give torque_peak (torque_max is its older name)")
@@ -825,7 +837,30 @@ def _limits(motor, file) -> DriveLimits | None:
     continuous = _number(motor, "torque_continuous", file, "drive.motor", low=1e-3, high=1e6,
                          unit="N m")
     speed = _number(motor, "speed_max_rpm", file, "drive.motor", low=1.0, high=1e6, unit="rpm")
+    rated = _number(motor, "rated_speed_rpm", file, "drive.motor", low=1.0, high=1e6,
+                    unit="rpm")
+    rad = 2 * math.pi / 60
+    curve = _torque_speed(motor, file, speed)
+    if curve is not None:
+        if rated is not None:
+            raise _err(file, "[drive.motor] rated_speed_rpm", "given with torque_speed, which "
+                       "already says how the torque falls with speed",
+                       "remove rated_speed_rpm (or torque_speed)")
+        for name, kind, given, values in (
+                (key, "peak", peak, curve.torque_peak),
+                ("torque_continuous", "continuous", continuous, curve.torque_continuous)):
+            if given is not None and not math.isclose(given, max(values), rel_tol=1e-9):
+                raise _err(file, f"[drive.motor] {name}", f"{given:g} N m is not the largest "
+                           f"{kind} torque of torque_speed ({max(values):g} N m)",
+                           f"remove {name} (the table gives it) or make the two agree")
+        if speed is None:
+            defaults.append(f"[drive.motor] speed_max_rpm from torque_speed: its last speed, "
+                            f"{curve.speed_max / rad:.6g} rpm")
+        return DriveLimits.from_curve(curve, None if speed is None else speed * rad)
     if continuous is None and (peak is None or key == "torque_max"):
+        if rated is not None:
+            raise _err(file, "[drive.motor] rated_speed_rpm", "given without torque_peak and "
+                       "torque_continuous", "add the torques [N m] it applies to, or remove it")
         return None  # torque_max alone is the informative field of older files
     if peak is None or continuous is None:
         missing = "torque_continuous" if peak is not None else "torque_peak"
@@ -835,7 +870,86 @@ def _limits(motor, file) -> DriveLimits | None:
     if continuous > peak:
         raise _err(file, "[drive.motor] torque_continuous", f"{continuous:g} N m exceeds "
                    f"{key} = {peak:g} N m", "give the rated (thermally continuous) torque")
-    return DriveLimits(peak, continuous, None if speed is None else speed * 2 * math.pi / 60)
+    if rated is not None and speed is not None and rated > speed:
+        raise _err(file, "[drive.motor] rated_speed_rpm", f"{rated:g} rpm exceeds speed_max_rpm "
+                   f"= {speed:g} rpm", "give the speed above which the torque falls, at most "
+                   "the top speed")
+    torques = f"{peak:g} N m peak, {continuous:g} N m continuous"
+    top = (f"up to speed_max_rpm = {speed:g}" if speed is not None else
+           "(no speed_max_rpm: at any speed)")
+    if rated is None:
+        defaults.append(f"[drive.motor] torque_speed absent: {torques} at every speed {top} "
+                        "(add torque_speed, or rated_speed_rpm, if the torque falls before)")
+    else:
+        defaults.append(f"[drive.motor] torque_speed absent: {torques} up to rated_speed_rpm = "
+                        f"{rated:g}, then falling at constant power (T x speed constant) {top}")
+    return DriveLimits(peak, continuous, None if speed is None else speed * rad,
+                       rated_speed=None if rated is None else rated * rad)
+
+
+def _torque_speed(motor, file, speed_max_rpm) -> TorqueSpeedCurve | None:
+    """``[drive.motor] torque_speed``: motor speed [rpm] and peak and continuous torque [N m]
+    at each; increasing speeds from 0 to at least ``speed_max_rpm``."""
+    table = motor.get("torque_speed")
+    if table is None:
+        return None
+    field = "[drive.motor] torque_speed"
+    if not isinstance(table, dict):
+        raise _err(file, field, f"got {table!r}", "give a table of motor speeds [rpm] and the "
+                   f"peak and continuous torques [N m] at each, e.g. {_TORQUE_SPEED_EXAMPLE}")
+    unknown = sorted(set(table) - set(_TORQUE_SPEED_KEYS))
+    missing = [k for k in _TORQUE_SPEED_KEYS if k not in table]
+    if unknown or missing:
+        raise _err(file, field, (f"unknown keys {unknown}" if unknown else "")
+                   + ("; " if unknown and missing else "")
+                   + (f"missing {missing}" if missing else ""),
+                   f"give exactly speed_rpm, peak and continuous, e.g. {_TORQUE_SPEED_EXAMPLE}")
+    columns = {}
+    for k, unit in (("speed_rpm", "rpm"), ("peak", "N m"), ("continuous", "N m")):
+        values = table[k]
+        if (not isinstance(values, list) or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                for v in values)):
+            raise _err(file, f"{field}.{k}", f"got {values!r}",
+                       f"give a list of finite numbers in {unit}")
+        columns[k] = [float(v) for v in values]
+    speeds, peaks, conts = columns["speed_rpm"], columns["peak"], columns["continuous"]
+    if not len(speeds) == len(peaks) == len(conts):
+        raise _err(file, field, f"speed_rpm has {len(speeds)} values, peak {len(peaks)} and "
+                   f"continuous {len(conts)}", "give one peak and one continuous torque per "
+                   "speed")
+    if len(speeds) < 2:
+        raise _err(file, f"{field}.speed_rpm", f"{len(speeds)} point(s) make no curve",
+                   "give at least two speeds, from 0 rpm to the motor's top speed")
+    if speeds[0] != 0.0:
+        raise _err(file, f"{field}.speed_rpm", f"the first speed is {speeds[0]:g} rpm",
+                   "start the table at 0 rpm (standstill)")
+    for a, b in itertools.pairwise(speeds):
+        if not b > a:
+            raise _err(file, f"{field}.speed_rpm", f"{a:g} rpm is followed by {b:g} rpm",
+                       "list the speeds in increasing order, each once")
+    if speeds[-1] > 1e6:
+        raise _err(file, f"{field}.speed_rpm", f"{speeds[-1]:g} rpm is outside the plausible "
+                   "range [0, 1e+06] rpm", "check the value and its unit (rpm)")
+    for k, values in (("peak", peaks), ("continuous", conts)):
+        for s, t in zip(speeds, values, strict=True):
+            if not 1e-3 <= t <= 1e6:
+                raise _err(file, f"{field}.{k}", f"{t:g} N m at {s:g} rpm is outside "
+                           "[0.001, 1e+06] N m", "give torques > 0 in N m (where the motor gives "
+                           "no torque it cannot run: end the table before that speed)")
+    for s, p, c in zip(speeds, peaks, conts, strict=True):
+        if c > p:
+            raise _err(file, f"{field}.continuous", f"{c:g} N m at {s:g} rpm exceeds the peak "
+                       f"torque there ({p:g} N m)", "give the thermally continuous torque, at "
+                       "most the peak torque at each speed")
+    if speed_max_rpm is not None and speeds[-1] < speed_max_rpm * (1 - 1e-9):
+        raise _err(file, f"{field}.speed_rpm", f"the table ends at {speeds[-1]:g} rpm, below "
+                   f"speed_max_rpm = {speed_max_rpm:g} rpm", "extend the table to the motor's "
+                   "top speed, or lower speed_max_rpm to where the table ends")
+    try:
+        return TorqueSpeedCurve.from_rpm(speeds, peaks, conts)
+    except ValueError as exc:
+        raise _err(file, field, str(exc), "fix the table") from None
 
 
 _SAMPLING_KEYS = ("current_period", "velocity_period", "position_period", "computation_delay",

@@ -24,6 +24,7 @@ from . import analysis, twomass
 from .axis import Axis
 from .blas import one_thread
 from .closed_loop import axis_compliance
+from .digital import SampledAxis
 from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
@@ -375,7 +376,9 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
 
     For each C the closed-loop plant (``viscous`` pads, the drive) is put in modal form,
     ``H(s) = sum_i R_i / (s - lambda_i)``; a mode's own peak is ``|R_i| / |Re lambda_i|``
-    (its pair's term at resonance). The modes are chosen at the design's C (the ``keep``
+    (its pair's term at resonance). A digital drive's loop is a sampled-data system without
+    poles in s: there the local maxima of its compliance (1500 log-spaced points from 1 Hz to
+    1.5 ``f_max_hz``) are the modes' peaks, at their frequencies. The modes are chosen at the design's C (the ``keep``
     largest peaks below ``f_max_hz`` that reach ``significance`` times the largest) and
     followed outwards in C by the nearest pole; a mode that turns over-damped or jumps by more
     than half its frequency ends its track (NaN). The design's C is added to the grid.
@@ -410,8 +413,21 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
     chosen = float(c_chosen if c_chosen is not None else axis.friction.viscous)
     c_values = np.unique(np.append(np.asarray(c_values, dtype=float), chosen))
     controlled = (drive or axis.drive) is not None
+    the_drive = (drive or axis.drive) if controlled else None
+    sampled = the_drive is not None and not the_drive.digital.is_continuous
     poles, peaks = [], []
     for c in c_values:
+        if sampled:
+            # a sampled-data loop has no poles in s: the local maxima of its compliance (the
+            # fundamental) stand for the modes, at j times their frequency
+            omega = 2 * math.pi * np.geomspace(1.0, 1.5 * f_max_hz, 1500)
+            h = np.abs(analysis.axis_loop(axis, Contact.viscous(c), the_drive).compliance(
+                omega)[0])
+            top = np.nonzero((h[1:-1] > h[:-2]) & (h[1:-1] >= h[2:]))[0] + 1
+            top = top[omega[top] * HZ_PER_RAD_S < f_max_hz]
+            poles.append(1j * omega[top])
+            peaks.append(h[top])
+            continue
         plant = analysis.axis_plant(axis, Contact.viscous(c), drive, controlled=controlled)
         sub = plant[plant.output_labels.index("wp_x"), plant.input_labels.index("f_wp_x")]
         lam, v = np.linalg.eig(sub.A)
@@ -473,6 +489,11 @@ class AxisTuning:
     c_realisation: tuple[CRealisation, ...] = ()
     process: dict | None = None
     notes: tuple[str, ...] = field(default=())
+    kp_limit: dict | None = None
+    """With a digital drive whose initial design is unstable: the largest velocity-loop Kp
+    that keeps the reference model's velocity loop stable at the initial Ti (position loop
+    open), as the sampled-data system (:meth:`servotune.digital.SampledAxis.largest_stable_kp`):
+    ``{"kp_max", "ti", "model", "kp_initial"}`` (SI)."""
 
     @property
     def design(self) -> Design:
@@ -569,6 +590,7 @@ class AxisTuning:
                                else None),
             "two_mass_check": None if self.two_mass is None else self.two_mass.to_dict(),
             "mode_peaks": None if self.mode_peaks is None else self.mode_peaks.to_dict(),
+            "kp_limit": self.kp_limit,
             "notes": list(self.notes),
         }
         return out
@@ -827,6 +849,15 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         out["c_realisation"] = c_realisations(problem.thrust, result.design.c,
                                               axis.friction.lugre.sigma2, amp, freq,
                                               axis.friction.lugre.sigma0, axis.operation)
+    if (axis.drive is not None and not result.before.stable
+            and not axis.drive.digital.is_continuous):
+        moving = problem.moving_models
+        model = problem.regimes[moving[0] if moving else 0]
+        initial = problem.drive_for(result.initial)
+        kp_max = SampledAxis(axis.structure, initial, model.contact(result.initial.c),
+                             problem.pads).largest_stable_kp(rtol=1e-3)
+        out["kp_limit"] = {"kp_max": kp_max, "ti": initial.velocity_loop.ti,
+                           "model": model.name, "kp_initial": initial.velocity_loop.kp}
     if axis.drive is not None and result.after is not None:
         before_drive = problem.drive_for(result.initial)
         after_drive = problem.drive_for(result.design)
@@ -862,8 +893,10 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         if "c" in problem.free and result.after.stable:
             lo, hi = problem.bounds["c"]
             try:
+                # a sampled-data loop's peaks are found on its compliance: a coarser C grid
+                n_c = 61 if after_drive.digital.is_continuous else 25
                 out["mode_peaks"] = mode_peaks_vs_damping(
-                    axis, np.geomspace(lo, hi, 61), after_drive, result.design.c)
+                    axis, np.geomspace(lo, hi, n_c), after_drive, result.design.c)
             except (ValueError, np.linalg.LinAlgError):
                 out["mode_peaks"] = None
         if simulate and axis.friction is not None:

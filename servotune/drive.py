@@ -38,6 +38,7 @@ sec 3. G. Ellis, Control System Design Guide, 4th ed., Butterworth-Heinemann (20
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -52,6 +53,7 @@ __all__ = [
     "kv_from_m_per_min_per_mm",
     "kv_to_m_per_min_per_mm",
     "Motor",
+    "TorqueSpeedCurve",
     "DriveLimits",
     "PIController",
     "LowPassFilter",
@@ -106,25 +108,162 @@ class Motor:
         return self.inductance / self.resistance
 
 
+#: Relative tolerance beyond a curve's last speed (or the top speed) still evaluated at it: a
+#: rapid speed of speed_max x r, referred back through r, lands a rounding error above it.
+_SPEED_TOLERANCE = 2e-6
+
+
+def _beyond(omega: float, top: float, what: str) -> ValueError:
+    return ValueError(f"motor speed {omega:.6g} rad/s ({omega * 60 / (2 * math.pi):.6g} rpm) is "
+                      f"beyond {what} ({top:.6g} rad/s, {top * 60 / (2 * math.pi):.6g} rpm): "
+                      "the drive cannot go there")
+
+
+@dataclass(frozen=True)
+class TorqueSpeedCurve:
+    """The torques a motor and its converter give over the motor speed (SI, at the shaft).
+
+    Linear between the points; not defined beyond the last one (the drive cannot go there).
+    Both directions of rotation are alike: the torques depend on ``|omega|``.
+
+    Parameters
+    ----------
+    speed : sequence of float
+        Motor speeds [rad/s], increasing, the first 0; at least two.
+    torque_peak : sequence of float
+        Peak torque at each speed [N m] (> 0).
+    torque_continuous : sequence of float
+        Continuous torque at each speed [N m] (> 0, at most the peak torque there).
+
+    Raises
+    ------
+    ValueError
+        Lengths that differ, fewer than two points, speeds not increasing from 0, torques not
+        finite and > 0, a continuous torque above the peak torque.
+
+    Examples
+    --------
+    Flat to 3000 rpm, then falling to two thirds at 4500 rpm:
+
+    >>> curve = TorqueSpeedCurve.from_rpm([0, 3000, 4500], [90, 90, 60], [27, 27, 18])
+    >>> round(curve.continuous(3750 * 2 * math.pi / 60), 6)    # half-way: 22.5 N m
+    22.5
+    """
+
+    speed: tuple[float, ...]
+    torque_peak: tuple[float, ...]
+    torque_continuous: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        n = len(self.speed)
+        for name, unit in (("speed", "rad/s"), ("torque_peak", "N m"),
+                           ("torque_continuous", "N m")):
+            values = tuple(getattr(self, name))
+            if len(values) != n:
+                raise ValueError(f"TorqueSpeedCurve.{name} has {len(values)} values, speed {n}: "
+                                 "give one torque per speed")
+            object.__setattr__(self, name, tuple(
+                positive("TorqueSpeedCurve", f"{name}[{i}]", v, unit, allow_zero=(
+                    name == "speed" and i == 0)) for i, v in enumerate(values)))
+        if n < 2:
+            raise ValueError(f"TorqueSpeedCurve needs at least two points, got {n}")
+        if self.speed[0] != 0.0 or any(b <= a for a, b in itertools.pairwise(self.speed)):
+            raise ValueError(f"TorqueSpeedCurve.speed must increase from 0, got {self.speed}")
+        pairs = zip(self.torque_peak, self.torque_continuous, strict=True)
+        for i, (p, c) in enumerate(pairs):
+            if c > p:
+                raise ValueError(f"TorqueSpeedCurve.torque_continuous[{i}] ({c:g} N m) exceeds "
+                                 f"torque_peak[{i}] ({p:g} N m)")
+
+    @classmethod
+    def from_rpm(cls, speed_rpm, torque_peak, torque_continuous) -> TorqueSpeedCurve:
+        """Return the curve from speeds in rpm (a data sheet's unit) and torques in N m.
+
+        Parameters
+        ----------
+        speed_rpm : sequence of float
+            Motor speeds [rpm], increasing from 0.
+        torque_peak, torque_continuous : sequence of float
+            Torques [N m] at those speeds.
+
+        Returns
+        -------
+        TorqueSpeedCurve
+            With the speeds in rad/s.
+        """
+        return cls(tuple(float(s) * 2 * math.pi / 60 for s in speed_rpm), tuple(torque_peak),
+                   tuple(torque_continuous))
+
+    @property
+    def speed_max(self) -> float:
+        """The last speed of the curve [rad/s]."""
+        return self.speed[-1]
+
+    def _at(self, values, omega: float) -> float:
+        w = abs(float(omega))
+        if w > self.speed_max * (1 + _SPEED_TOLERANCE):
+            raise _beyond(w, self.speed_max, "the torque-speed curve's last point")
+        return float(np.interp(min(w, self.speed_max), self.speed, values))
+
+    def peak(self, omega: float) -> float:
+        """Return the peak torque [N m] at a motor speed [rad/s].
+
+        Raises
+        ------
+        ValueError
+            Beyond the last point of the curve.
+        """
+        return self._at(self.torque_peak, omega)
+
+    def continuous(self, omega: float) -> float:
+        """Return the continuous torque [N m] at a motor speed [rad/s].
+
+        Raises
+        ------
+        ValueError
+            Beyond the last point of the curve.
+        """
+        return self._at(self.torque_continuous, omega)
+
+
 @dataclass(frozen=True)
 class DriveLimits:
     """What the motor and its converter can deliver (SI, at the motor shaft).
+
+    The torques over speed (:meth:`peak`, :meth:`continuous`) come from, in this order:
+
+    * ``torque_speed``, the motor's torque-speed curve (a data sheet's table);
+    * ``rated_speed``: the rated torques up to it, then falling at constant power
+      (``T(w) = T_rated w_rated / w``) up to ``speed_max``;
+    * otherwise the rated torques held constant up to ``speed_max`` (a flat curve in the usable
+      range: what an axis file with only ``torque_peak``, ``torque_continuous`` and
+      ``speed_max_rpm`` says, when its continuous torque is the rated torque at the top speed).
 
     Parameters
     ----------
     torque_peak : float
         Largest torque for accelerations and short loads [N m] (the converter's current limit
-        times kt, or the motor's own maximum, whichever is lower).
+        times kt, or the motor's own maximum, whichever is lower). With ``torque_speed``, the
+        largest peak torque of the curve.
     torque_continuous : float
         Torque the motor carries thermally without limit of time [N m] (the rated torque at
-        speed; the stall torque M0 at standstill is somewhat higher).
+        speed; the stall torque M0 at standstill is somewhat higher). With ``torque_speed``,
+        the largest continuous torque of the curve.
     speed_max : float, optional
-        Largest motor speed [rad/s] (None: not given).
+        Largest motor speed [rad/s] (None: not given; with ``torque_speed``, the curve's last
+        speed).
+    torque_speed : TorqueSpeedCurve, optional
+        The torques over speed.
+    rated_speed : float, optional
+        Speed [rad/s] above which the torques fall at constant power (not with
+        ``torque_speed``; at most ``speed_max``).
 
     Raises
     ------
     ValueError
-        Non-positive or non-finite values, or a continuous torque above the peak torque.
+        Non-positive or non-finite values, a continuous torque above the peak torque, torques
+        that are not the largest of ``torque_speed``, a ``speed_max`` beyond the curve's last
+        speed, ``rated_speed`` with ``torque_speed`` or above ``speed_max``.
 
     Examples
     --------
@@ -133,21 +272,100 @@ class DriveLimits:
     >>> limits = DriveLimits(torque_peak=90.0, torque_continuous=27.0, speed_max=314.16)
     >>> round(limits.torque_peak / 1.5915e-3)        # N of peak thrust with lead 20 mm, belt 2
     56550
+    >>> limits.continuous(314.16) == limits.continuous(0.0) == 27.0   # flat: no curve given
+    True
+
+    Constant power above a rated speed: at twice the rated speed, half the torque.
+
+    >>> DriveLimits(90.0, 27.0, speed_max=400.0, rated_speed=200.0).continuous(400.0)
+    13.5
     """
 
     torque_peak: float
     torque_continuous: float
     speed_max: float | None = None
+    torque_speed: TorqueSpeedCurve | None = None
+    rated_speed: float | None = None
 
     def __post_init__(self) -> None:
         for name, unit in (("torque_peak", "N m"), ("torque_continuous", "N m"),
-                           ("speed_max", "rad/s")):
-            if getattr(self, name) is not None or name != "speed_max":
+                           ("speed_max", "rad/s"), ("rated_speed", "rad/s")):
+            if getattr(self, name) is not None or name not in ("speed_max", "rated_speed"):
                 object.__setattr__(self, name, positive("DriveLimits", name,
                                                         getattr(self, name), unit))
         if self.torque_continuous > self.torque_peak:
             raise ValueError(f"DriveLimits.torque_continuous ({self.torque_continuous:g} N m) "
                              f"exceeds torque_peak ({self.torque_peak:g} N m)")
+        curve = self.torque_speed
+        if curve is not None:
+            if not isinstance(curve, TorqueSpeedCurve):
+                raise ValueError("DriveLimits.torque_speed must be a TorqueSpeedCurve or None")
+            if self.rated_speed is not None:
+                raise ValueError("DriveLimits.rated_speed with torque_speed: the curve already "
+                                 "says how the torque falls; give one of them")
+            for name, values in (("torque_peak", curve.torque_peak),
+                                 ("torque_continuous", curve.torque_continuous)):
+                if not math.isclose(getattr(self, name), max(values), rel_tol=1e-9):
+                    raise ValueError(f"DriveLimits.{name} ({getattr(self, name):g} N m) is not "
+                                     f"the largest of torque_speed ({max(values):g} N m)")
+            if self.speed_max is None:
+                object.__setattr__(self, "speed_max", curve.speed_max)
+            elif self.speed_max > curve.speed_max * (1 + 1e-9):
+                raise ValueError(f"DriveLimits.speed_max ({self.speed_max:.6g} rad/s) is beyond "
+                                 f"the torque-speed curve's last point ({curve.speed_max:.6g} "
+                                 "rad/s)")
+        if (self.rated_speed is not None and self.speed_max is not None
+                and self.rated_speed > self.speed_max * (1 + 1e-9)):
+            raise ValueError(f"DriveLimits.rated_speed ({self.rated_speed:.6g} rad/s) exceeds "
+                             f"speed_max ({self.speed_max:.6g} rad/s)")
+
+    @classmethod
+    def from_curve(cls, curve: TorqueSpeedCurve, speed_max: float | None = None) -> DriveLimits:
+        """Return the limits of a torque-speed curve (its largest torques, its last speed).
+
+        Parameters
+        ----------
+        curve : TorqueSpeedCurve
+            The torques over speed.
+        speed_max : float, optional
+            Largest motor speed [rad/s], at most the curve's last speed (default: that).
+
+        Returns
+        -------
+        DriveLimits
+        """
+        return cls(max(curve.torque_peak), max(curve.torque_continuous), speed_max, curve)
+
+    def _at(self, rated: float, which: str, omega: float) -> float:
+        w = abs(float(omega))
+        if self.speed_max is not None and w > self.speed_max * (1 + _SPEED_TOLERANCE):
+            raise _beyond(w, self.speed_max, "the motor's top speed")
+        if self.torque_speed is not None:
+            return getattr(self.torque_speed, which)(w)
+        if self.rated_speed is not None and w > self.rated_speed:
+            return rated * self.rated_speed / w
+        return rated
+
+    def peak(self, omega: float) -> float:
+        """Return the peak torque [N m] at a motor speed [rad/s] (see the class docstring).
+
+        Raises
+        ------
+        ValueError
+            Beyond ``speed_max`` or the curve's last point.
+        """
+        return self._at(self.torque_peak, "peak", omega)
+
+    def continuous(self, omega: float) -> float:
+        """Return the continuous torque [N m] at a motor speed [rad/s] (see the class
+        docstring).
+
+        Raises
+        ------
+        ValueError
+            Beyond ``speed_max`` or the curve's last point.
+        """
+        return self._at(self.torque_continuous, "continuous", omega)
 
 
 @dataclass(frozen=True)

@@ -149,6 +149,11 @@ def design_table(job) -> Table:
                      + (" (as the sampled-data system the digital drive is)"
                         if r.problem.drive is not None
                         and not r.problem.drive.digital.is_continuous else ""))
+        if job.kp_limit is not None:
+            k = job.kp_limit
+            notes.append(f"the sampled-data velocity loop of {k['model']} is stable only up to "
+                         f"Kp = {k['kp_max']:.4g} N m s/rad at Ti = {k['ti'] * 1e3:.4g} ms "
+                         f"(position loop open); the initial Kp is {k['kp_initial']:.4g}")
         if r.start is not None and r.start != r.initial:
             notes.append(f"the tuning started from a softer velocity loop: Kp = "
                          f"{r.start.kp:.4g} N m s/rad")
@@ -270,6 +275,10 @@ def loops_table(job) -> Table | None:
 def thrust_table(job) -> Table | None:
     """Return the thrust needed against the thrust available, term by term, for the tuned design.
 
+    One row per case of the duty (:meth:`servotune.thrust.ThrustBudget.cases`: accelerating to
+    rapid speed, traversing at it, feeding, standing), each with the usable thrust at its own
+    speed and the largest C it allows; the note gives the least of those, the budget's bound.
+
     Parameters
     ----------
     job : servotune.design.AxisTuning
@@ -283,18 +292,21 @@ def thrust_table(job) -> Table | None:
     t = job.thrust_after
     if t is None:
         return None
+    limits = t.get("c_max_by_case", {})
     rows = []
     for case in t["cases"]:
         terms = ", ".join(f"{k} {v / 1e3:.3g}" for k, v in case["terms_n"].items() if v)
         rows.append((f"{case['name']} ({case['thrust']})", f"{case['usable_n'] / 1e3:.3g}",
                      f"{case['needed_n'] / 1e3:.3g}", f"{case['utilisation']:.0%}",
-                     "yes" if case["fits"] else "NO", terms))
-    notes = (f"usable = {1 - t['margin']:.0%} of the motor's thrust ({t['margin']:.0%} kept in "
-             f"reserve); moving mass {t['moving_mass_kg']:.4g} kg at the slide; the budget "
-             f"allows a total viscous C of up to {t['c_max']:.4g} N s/m",)
+                     "yes" if case["fits"] else "NO", _f(limits.get(case["name"])), terms))
+    binding = t.get("c_max_case")
+    notes = (f"usable = {1 - t['margin']:.0%} of the motor's thrust at the case's speed "
+             f"({t['margin']:.0%} kept in reserve); moving mass {t['moving_mass_kg']:.4g} kg at "
+             f"the slide; the budget allows a total viscous C of up to {t['c_max']:.4g} N s/m"
+             + (f", the least over the cases (set by {binding})" if binding else ""),)
     return Table("Thrust [kN]: usable, needed (at the tuned C)",
-                 ("case", "usable", "needed", "of available", "fits", "terms [kN]"),
-                 tuple(rows), notes)
+                 ("case", "usable", "needed", "of available", "fits", "C up to [N s/m]",
+                  "terms [kN]"), tuple(rows), notes)
 
 
 def realisation_table(job) -> Table | None:

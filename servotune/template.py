@@ -118,6 +118,10 @@ inductance = 3.0e-3                 # L [H]
 torque_peak = 36.0                  # largest torque (converter current limit x kt) [N m]
 torque_continuous = 12.0            # rated, thermally continuous torque [N m]
 speed_max_rpm = 3000.0              # largest motor speed [rpm] (sets the rapid speed)
+# the torques over speed (default: torque_peak and torque_continuous at every speed up to
+# speed_max_rpm): the data sheet's curve, linear between its points, from 0 rpm to the top speed
+# torque_speed = {{ speed_rpm = [0, 2000, 3000], peak = [36, 36, 24], continuous = [12, 12, 8] }}
+# rated_speed_rpm = 2000.0          # or: the torques fall at constant power above this [rpm]
 
 [drive.sampling]                    # the digital drive (delays cost phase: margins include them)
 current_period = 125.0e-6           # sample period of the current controller [s]

@@ -4,15 +4,27 @@ A viscous guide-way damping C damps the structure, but in the feed direction it 
 feeding: its force C v comes out of the motor's thrust. The budget compares what the axis needs
 with what the drive gives, at the slide (SI)::
 
-    at rapid traverse (peak thrust):     g(v_r) + C v_r + m a                <= (1 - margin) F_peak
-    while cutting (continuous thrust):   g(v_f) + C v_f + F_cut             <= (1 - margin) F_cont
+    accelerating to rapid (peak):        g(v_r) + C v_r + m a    <= (1 - margin) F_peak(v_r)
+    rapid traverse (continuous):         g(v_r) + C v_r          <= (1 - margin) F_cont(v_r)
+    feeding at each v_f (continuous):    g(v_f) + C v_f + F_cut  <= (1 - margin) F_cont(v_f)
 
+(and, without feed speeds, standing against the cutting force: F_cut <= (1 - margin) F_cont(0)),
 with g(v) the Coulomb-Stribeck friction of the guide ways (LuGre steady state without its viscous
 part), C the total viscous damping (the identified sigma2 or the design's C that replaces it), m
 the moving mass referred to the slide (slide, work piece, screw and motor inertia through the
-transmission), a the acceleration of rapid moves, F_cut the mean cutting force against the feed,
-F_peak = T_peak / r and F_cont = T_cont / r. All axis friction is lumped at the guide ways (the
-paper's sec 3), so the transmission's efficiency is already in the friction and is taken as 1.
+transmission), a the acceleration of rapid moves, v_r the rapid speed, F_cut the mean cutting
+force against the feed, and F_peak(v) = T_peak(v / r) / r, F_cont(v) = T_cont(v / r) / r the
+thrusts of the motor's torque-speed curve at the case's speed (:class:`servotune.drive.
+DriveLimits`: a data-sheet table, or the rated torques, flat up to the top speed or falling at
+constant power above a rated speed). The acceleration is checked where it ends, at v_r, where
+C v_r is largest (and a falling curve lowest); the start of a move, where the static friction
+F_s instead of g(v_r) can need more at a small C, is not checked. The traverse at constant rapid
+speed is a continuous load, however long the move. All axis friction is lumped at the guide
+ways (the paper's sec 3), so the transmission's efficiency is already in the friction and is
+taken as 1.
+
+Each case is affine in C, ``F_fix + C v <= F_usable``, so the largest C the budget allows is
+``min over the cases with v > 0 of (F_usable - F_fix) / v`` (:meth:`ThrustBudget.c_max`).
 
 What could realise C (:func:`c_realisations`):
 
@@ -45,7 +57,7 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from .drive import Drive
+from .drive import Drive, DriveLimits
 from .friction.equivalent import describing_function
 from .friction.lugre import LuGreParameters, stribeck_curve
 from .regimes import Operation
@@ -156,7 +168,8 @@ class ThrustBudget:
     Attributes
     ----------
     thrust_peak, thrust_continuous : float
-        [N] at the slide.
+        [N] at the slide: the rated (largest) thrusts; they hold at every speed when ``limits``
+        is None.
     margin : float
         Fraction kept in reserve.
     mass : float
@@ -164,6 +177,32 @@ class ThrustBudget:
     friction : LuGreParameters
         Axis-total friction (its sigma2 is replaced by the C of each evaluation).
     operation : Operation
+    limits : DriveLimits, optional
+        The motor's torques over speed (:meth:`DriveLimits.peak`, :meth:`DriveLimits.continuous`)
+        with ``ratio``: the thrust of a case is taken at its speed. Its largest torques over
+        ``ratio`` must be ``thrust_peak`` and ``thrust_continuous``.
+    ratio : float, optional
+        Transmission ratio r [m/rad] (with ``limits``).
+
+    Raises
+    ------
+    ValueError
+        ``limits`` without ``ratio`` or the other way round, thrusts that are not the limits'
+        torques over r, or a speed of the operation the motor cannot reach (beyond its top speed
+        or its torque-speed curve).
+
+    Examples
+    --------
+    A traverse at 0.5 m/s against 300 N of Coulomb friction with 12 kN of continuous thrust,
+    20 % kept: C <= (0.8 x 12000 - 300) / 0.5 = 18600 N s/m; accelerating 1000 kg at 2 m/s^2
+    with 40 kN of peak thrust allows more, (0.8 x 40000 - 300 - 2000) / 0.5 = 59400 N s/m.
+
+    >>> p = LuGreParameters(fc=300.0, fs=300.0, vs=0.01, delta=1.0, sigma0=1e9, sigma1=0.0,
+    ...                     sigma2=0.0)
+    >>> b = ThrustBudget(4e4, 1.2e4, 0.2, 1000.0, p,
+    ...                  Operation(feed_speeds=(), rapid_speed=0.5, acceleration=2.0))
+    >>> round(b.c_max()), b.c_max_case()
+    (18600, 'rapid traverse')
     """
 
     thrust_peak: float
@@ -172,16 +211,75 @@ class ThrustBudget:
     mass: float
     friction: LuGreParameters
     operation: Operation
+    limits: DriveLimits | None = None
+    ratio: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.limits is None) != (self.ratio is None):
+            raise ValueError("ThrustBudget: give limits and ratio together (the torque-speed "
+                             "curve at the motor and the transmission to the slide), or neither")
+        if self.limits is None:
+            return
+        if not isinstance(self.limits, DriveLimits):
+            raise ValueError("ThrustBudget.limits must be a DriveLimits or None")
+        if not (math.isfinite(self.ratio) and self.ratio > 0):
+            raise ValueError(f"ThrustBudget.ratio must be finite and > 0 [m/rad], got "
+                             f"{self.ratio!r}")
+        for name, torque in (("thrust_peak", self.limits.torque_peak),
+                             ("thrust_continuous", self.limits.torque_continuous)):
+            if not math.isclose(getattr(self, name), torque / self.ratio, rel_tol=1e-9):
+                raise ValueError(f"ThrustBudget.{name} ({getattr(self, name):.6g} N) is not the "
+                                 f"limits' torque over the ratio ({torque / self.ratio:.6g} N)")
+        op = self.operation
+        for v in (*((op.rapid_speed,) if op.rapid_speed is not None else ()), *op.feed_speeds):
+            try:
+                self.thrust_peak_at(v)
+            except ValueError as exc:
+                raise ValueError(f"ThrustBudget: the operation's speed of {v:.6g} m/s at the "
+                                 f"slide: {exc}") from None
+
+    def thrust_peak_at(self, v: float) -> float:
+        """Return the peak thrust [N] at a slide speed [m/s]: T_peak(v / r) / r.
+
+        Raises
+        ------
+        ValueError
+            Beyond the motor's top speed or its torque-speed curve.
+        """
+        if self.limits is None:
+            return self.thrust_peak
+        return self.limits.peak(v / self.ratio) / self.ratio
+
+    def thrust_continuous_at(self, v: float) -> float:
+        """Return the continuous thrust [N] at a slide speed [m/s]: T_cont(v / r) / r.
+
+        Raises
+        ------
+        ValueError
+            Beyond the motor's top speed or its torque-speed curve.
+        """
+        if self.limits is None:
+            return self.thrust_continuous
+        return self.limits.continuous(v / self.ratio) / self.ratio
 
     def _coulomb(self, v: float) -> float:
         return float(stribeck_curve(self.friction, v))
 
+    def _case(self, name, v, kind, terms, extra_friction) -> ThrustCase:
+        if extra_friction:
+            terms = [*terms, ("friction damper", extra_friction)]
+        available = (self.thrust_peak_at(v) if kind == "peak" else
+                     self.thrust_continuous_at(v))
+        return ThrustCase(name, v, kind, available, (1 - self.margin) * available, tuple(terms))
+
     def cases(self, c: float, extra_friction: float = 0.0) -> tuple[ThrustCase, ...]:
         """Return the load cases with a total viscous damping and an added friction level.
 
-        One peak-thrust case at the rapid speed (friction, viscous force and acceleration),
-        one continuous case per feed speed (friction, viscous force and the feed force), and a
-        standing case against the feed force when there is no feed speed.
+        At the rapid speed, one peak-thrust case at the end of the acceleration (friction,
+        viscous force and acceleration) and one continuous case traversing at constant speed
+        (friction and viscous force); one continuous case per feed speed (friction, viscous
+        force and the feed force); and a standing case against the feed force when there is no
+        feed speed. Each against the usable thrust at its own speed.
 
         Parameters
         ----------
@@ -193,29 +291,23 @@ class ThrustBudget:
         Returns
         -------
         tuple of ThrustCase
-            The cases, rapid traverse first.
+            The cases: accelerating to rapid, rapid traverse, feeding, standing.
         """
         op, out = self.operation, []
-        usable_peak = (1 - self.margin) * self.thrust_peak
-        usable_cont = (1 - self.margin) * self.thrust_continuous
         if op.rapid_speed is not None:
             v = op.rapid_speed
-            terms = [("friction g(v)", self._coulomb(v)), ("viscous C v", c * v),
-                     ("acceleration m a", self.mass * op.acceleration)]
-            if extra_friction:
-                terms.append(("friction damper", extra_friction))
-            out.append(ThrustCase("rapid traverse", v, "peak", self.thrust_peak, usable_peak,
-                                  tuple(terms)))
+            moving = [("friction g(v)", self._coulomb(v)), ("viscous C v", c * v)]
+            out.append(self._case("accelerating to rapid", v, "peak",
+                                  [*moving, ("acceleration m a", self.mass * op.acceleration)],
+                                  extra_friction))
+            out.append(self._case("rapid traverse", v, "continuous", moving, extra_friction))
         for v in op.feed_speeds:
-            terms = [("friction g(v)", self._coulomb(v)), ("viscous C v", c * v),
-                     ("cutting force", op.feed_force)]
-            if extra_friction:
-                terms.append(("friction damper", extra_friction))
-            out.append(ThrustCase(f"feeding {v * 1e3:.3g} mm/s", v, "continuous",
-                                  self.thrust_continuous, usable_cont, tuple(terms)))
+            out.append(self._case(f"feeding {v * 1e3:.3g} mm/s", v, "continuous",
+                                  [("friction g(v)", self._coulomb(v)), ("viscous C v", c * v),
+                                   ("cutting force", op.feed_force)], extra_friction))
         if not op.feed_speeds:  # holding against the cutting force at rest
-            out.append(ThrustCase("standing", 0.0, "continuous", self.thrust_continuous,
-                                  usable_cont, (("cutting force", op.feed_force),)))
+            out.append(self._case("standing", 0.0, "continuous",
+                                  [("cutting force", op.feed_force)], 0.0))
         return tuple(out)
 
     def linear_form(self) -> tuple[tuple[float, float, float, str], ...]:
@@ -224,26 +316,49 @@ class ThrustBudget:
         Returns
         -------
         tuple of (float, float, float, str)
-            (fixed [N], speed [m/s], usable [N], name) per case, in the order of :meth:`cases`.
+            (fixed [N], speed [m/s], usable [N] at that speed, name) per case, in the order of
+            :meth:`cases`.
         """
         out = []
         for case in self.cases(0.0):
             out.append((case.needed, case.speed, case.usable, case.name))
         return tuple(out)
 
+    def c_limits(self) -> dict[str, float]:
+        """Return the largest total viscous damping [N s/m] each case with a speed allows.
+
+        Returns
+        -------
+        dict
+            ``(usable - fixed) / speed`` by case name (negative when even C = 0 does not fit).
+        """
+        return {name: (usable - fixed) / speed for fixed, speed, usable, name
+                in self.linear_form() if speed > 0}
+
     def c_max(self) -> float:
         """Return the largest total viscous damping [N s/m] every case allows.
 
-        ``inf`` when no case has a speed; negative when even C = 0 does not fit.
+        The minimum over the cases of :meth:`c_limits`; ``inf`` when no case has a speed;
+        negative when even C = 0 does not fit.
 
         Returns
         -------
         float
             C_max [N s/m].
         """
-        limits = [(usable - fixed) / speed for fixed, speed, usable, _ in self.linear_form()
-                  if speed > 0]
-        return min(limits) if limits else math.inf
+        limits = self.c_limits()
+        return min(limits.values()) if limits else math.inf
+
+    def c_max_case(self) -> str | None:
+        """Return the name of the case that sets :meth:`c_max` (None when no case has a speed).
+
+        Returns
+        -------
+        str or None
+            The binding case.
+        """
+        limits = self.c_limits()
+        return min(limits, key=limits.get) if limits else None
 
     def to_dict(self, c: float) -> dict:
         """Return the budget at a damping as a JSON-ready dictionary.
@@ -256,13 +371,15 @@ class ThrustBudget:
         Returns
         -------
         dict
-            Thrusts [N], margin, moving mass [kg], ``c_max`` [N s/m], whether all cases fit,
-            and the cases (:meth:`ThrustCase.to_dict`).
+            Thrusts [N] (rated), margin, moving mass [kg], ``c_max`` [N s/m] and the case that
+            sets it, the limit of each case (``c_max_by_case``), whether all cases fit, and the
+            cases (:meth:`ThrustCase.to_dict`).
         """
         cases = self.cases(c)
         return {"thrust_peak_n": self.thrust_peak, "thrust_continuous_n": self.thrust_continuous,
                 "margin": self.margin, "moving_mass_kg": self.mass,
-                "c_max": self.c_max(), "fits": all(x.fits for x in cases),
+                "c_max": self.c_max(), "c_max_case": self.c_max_case(),
+                "c_max_by_case": self.c_limits(), "fits": all(x.fits for x in cases),
                 "cases": [x.to_dict() for x in cases]}
 
 
@@ -274,7 +391,8 @@ def thrust_budget(drive: Drive | None, friction: LuGreParameters | None,
     Parameters
     ----------
     drive : Drive or None
-        The drive; its torque limits through the transmission give the thrusts.
+        The drive; its torque limits (and their torque-speed curve) through the transmission
+        give the thrusts at each case's speed.
     friction : LuGreParameters or None
         Axis-total guide-way friction.
     operation : Operation or None
@@ -294,12 +412,14 @@ def thrust_budget(drive: Drive | None, friction: LuGreParameters | None,
     Raises
     ------
     ValueError
-        When the structure has no rigid-body travel along the pads (:func:`moving_mass`).
+        When the structure has no rigid-body travel along the pads (:func:`moving_mass`), or
+        a speed of the operation is beyond the motor's top speed or torque-speed curve.
     """
     if drive is None or drive.limits is None or friction is None or operation is None:
         return None
     return ThrustBudget(drive.thrust_peak, drive.thrust_continuous, float(margin),
-                        moving_mass(structure, pads, drive), friction, operation)
+                        moving_mass(structure, pads, drive), friction, operation,
+                        limits=drive.limits, ratio=drive.ratio)
 
 
 @dataclass(frozen=True)

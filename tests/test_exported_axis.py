@@ -26,7 +26,8 @@ from axis_fixtures import PADS, small_axis, small_drive
 import servotune as st
 from servotune.axis import AxisFormatError, structure_matrices
 from servotune.cli import main
-from servotune.plant import Contact, loop_transfer
+from servotune.closed_loop import closed_loop
+from servotune.plant import Contact
 from servotune.tuning import RequirementsNotMetError, TuningProblem, tune
 from servotune.tuning.nlp import Solver
 
@@ -268,10 +269,9 @@ def test_tune_writes_results_with_reasons_and_warns_about_the_band(tmp_path, cap
     # and |L| ~ kv / omega there (the velocity loop closed follows its command)
     axis = st.load_axis(tmp_path / "ax")
     d = dataclasses.replace(axis.drive, kv=written["design"]["kv"])
-    lt = loop_transfer(axis.structure, d, Contact.viscous(written["design"]["c"]), axis.pads,
-                       "position")
     w_low = TWO_PI * 0.1
-    gain = abs(complex(lt(1j * w_low)))
+    gain = abs(complex(closed_loop(axis.structure, d, Contact.viscous(written["design"]["c"]),
+                                   axis.pads).loop_response("position", [w_low])[0]))
     assert gain < 1.0 and gain == pytest.approx(0.1 / w_low, rel=0.05)
     # the band warning names the band, the frequency reached and the fix; the kept mode is the
     # lowest fixed-interface mode of the full matrices (boundary held)

@@ -21,6 +21,7 @@ from numpy.testing import assert_allclose
 from scipy.optimize import brentq
 
 from servotune.axis import load_axis
+from servotune.closed_loop import axis_compliance
 from servotune.frequency import port_compliance
 from servotune.harmonic import (
     ContinuationSettings,
@@ -62,8 +63,13 @@ def test_pad_receptance_closed_by_a_viscous_contact_is_port_compliance(continuou
         z = 1j * w * c / n                      # f_p = -z x_p per pad
         xp = np.linalg.solve(np.eye(n) + g[:n, :n, k] * z, g[:n, n, k])
         ours.append(g[n, n, k] - g[n, :n, k] @ (z * xp))
-    ref = port_compliance(s.structure, omega, s.drive, Contact.viscous(c), s.pads)[0]
-    assert_allclose(ours, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max())
+    ref = axis_compliance(s.structure, omega, s.drive, Contact.viscous(c), s.pads)[0]
+    # continuous: the same coupling, to rounding; sampled: the fundamental of the free-pad
+    # receptance closed by a continuous contact leaves out what the holds' aliases feed back
+    # through the contact (below 1e-6 of the fundamental here) and the receptance is
+    # interpolated from its table (1e-6)
+    tol = 1e-9 if continuous else 1e-5
+    assert_allclose(ours, ref, rtol=tol, atol=tol * np.abs(ref).max())
 
 
 def test_a_linear_law_balances_to_the_linear_compliance(setup):

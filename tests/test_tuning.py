@@ -55,8 +55,11 @@ def _direct(ss, omega):
 
 @pytest.mark.parametrize("digital", [False, True])
 def test_port_responses_equal_the_state_space_plant(digital):
-    # every regime model's contact and, with a digital drive, the delays (as the Pade blocks of
-    # the state space when exact_delays=False) in the port model against build_plant
+    # every regime model's contact in the port model against the closed loop: continuous, the
+    # python-control state space (build_plant, loop_transfer); digital, the sampled-data
+    # model (servotune.digital.SampledAxis: the plant's zero-order hold by expm, the lifts
+    # summed over every term), which the port model's corrections make it equal at the design
+    from servotune.digital import SampledAxis
     from servotune.drive import Sampling
     from servotune.friction import LuGreParameters
     from servotune.regimes import RegimeModel
@@ -73,15 +76,55 @@ def test_port_responses_equal_the_state_space_plant(digital):
                             regimes=models)
     design = Design(c=2.2e5, kv=30.0, kp=5.0, ti=4e-3)
     omega = 2 * np.pi * np.geomspace(0.5, 2000.0, 200)
-    got = evaluate(problem, design, omega, exact_delays=False)
+    got = evaluate(problem, design, omega)
     d = problem.drive_for(design)
     for m, model in enumerate(models):
         contact = model.contact(design.c)
+        if digital:
+            ref = SampledAxis(structure, d, contact, PADS)
+            h = ref.compliance(omega)[0]
+            # above the position controller's Nyquist frequency the port model leaves the
+            # position loop out (its rows repeat there; its share of the compliance is small)
+            slow = omega < ref.nyquist("position")
+            assert_allclose(got["compliance"][m][slow], h[slow], rtol=1e-8,
+                            atol=1e-8 * np.abs(h).max())
+            assert_allclose(got["compliance"][m], h, rtol=1e-4, atol=1e-8 * np.abs(h).max())
+            for loop in ("velocity", "position"):
+                # each loop up to its controller's Nyquist frequency; the position loop's rows
+                # are zero above it in the port model
+                below = omega < ref.nyquist(loop)
+                lr = ref.loop_response(loop, omega[below])
+                assert_allclose(got[f"loop_{loop}"][m][below], lr, rtol=1e-8,
+                                atol=1e-8 * np.abs(lr).max())
+            assert np.all(got["loop_position"][m][omega >= ref.nyquist("position")] == 0)
+            continue
         plant = build_plant(structure, d, contact, PADS)
         assert_allclose(got["compliance"][m], plant_compliance(plant, omega), rtol=1e-8)
         for loop in ("velocity", "position"):
             ref = loop_transfer(structure, d, contact, PADS, loop)
             assert_allclose(got[f"loop_{loop}"][m], _direct(ref, omega), rtol=1e-8)
+
+
+def test_frozen_corrections_of_the_digital_drive_stay_close_away_from_their_design():
+    # the port model with its sampled-data corrections from another design (as the optimiser
+    # uses them between exchange rounds) against the exact model: the hold's aliases do not
+    # depend on the design, the lifts' further terms only a little
+    from servotune.drive import Sampling
+    from servotune.tuning import ResponseModel
+
+    structure = small_axis()
+    problem = TuningProblem(structure, PADS, c=8e4, drive=small_drive(sampling=Sampling()),
+                            free=("c", "kv", "kp", "ti"))
+    omega = 2 * np.pi * np.geomspace(0.5, 450.0, 300)
+    reference = Design(c=8e4, kv=20.0, kp=3.0, ti=6e-3)
+    design = Design(c=2.4e5, kv=35.0, kp=5.0, ti=4e-3)
+    model = ResponseModel(problem, omega, reference)
+    frozen, exact = model(design, exact=False), model(design)
+    for name in ("loop_velocity", "loop_position"):
+        s_frozen, s_exact = 1 / (1 + frozen[name]), 1 / (1 + exact[name])
+        assert np.abs(s_frozen - s_exact).max() <= 1e-3 * np.abs(s_exact).max()
+    h0, h1 = frozen["compliance"], exact["compliance"]
+    assert np.abs(h0 - h1).max() <= 1e-3 * np.abs(h1).max()
 
 
 def brute_force(problem, kp_values, c_values, omega_band, omega_loop):

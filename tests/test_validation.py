@@ -150,8 +150,10 @@ def test_drive_parts_keep_good_values_as_floats():
     assert PIController(kp=30, ti=INF).ti == INF
     notch = NotchFilter(410, width=0.5, depth=0)
     assert (notch.f_hz, notch.width, notch.depth) == (410.0, 0.5, 0.0)
-    s = Sampling(current_period=0, velocity_period=62.5e-6, speed_filter=0)
-    assert (s.current_period, s.velocity_period, s.speed_filter) == (0.0, 62.5e-6, 0.0)
+    s = Sampling(current_period=62.5e-6, velocity_period=62.5e-6, speed_filter=0,
+                 computation_delay=np.float64(1.0))
+    assert (s.current_period, s.velocity_period, s.speed_filter) == (62.5e-6, 62.5e-6, 0.0)
+    assert type(s.computation_delay) is int
     drive = small_drive(kv=np.float64(25.5), velocity_feedforward=1)
     assert (drive.kv, drive.velocity_feedforward) == (25.5, 1.0)
     assert type(drive.kv) is float

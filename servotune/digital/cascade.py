@@ -25,9 +25,9 @@ periods and the output sampled every N periods give, in the slower rate,
     G_lift(w) = (1/N) sum_{l=0}^{N-1} B_N(w_l) G(w_l),   w_l = w + l 2 pi / (N T'),
     B_N(v) = sum_{n=0}^{N-1} exp(-j v n T')
 
-exact (every component the hold creates, folded back by the sampler); the fundamental of
+is exact (every component the hold creates, folded back by the sampler); the fundamental of
 the held input in the faster rate is ``B_N(w) / N`` times the slower one. The levels then
-close as
+close as::
 
     current:   R_c = 1 / (1 - K_ci G_i)                   (K_ci: voltage per sampled current)
                phi_T = G_phi K_ct R_c,  x_T = G_x K_ct R_c (per held set-point; K_ct)
@@ -40,9 +40,9 @@ D the computation delay, C the PI, M the speed measurement), and the fundamental
 F follows back down the levels (:func:`fundamental`).
 
 What the fundamental leaves out: the components at w + l 2 pi / T' that the holds create in
-the continuous outputs (aliases). Their size is what :func:`servotune.digital.SampledAxis.
-alias_fraction` reports; on the bundled axis they stay below 0.1 % of the fundamental over the
-requirements band (``docs/digital_drive.md``).
+the continuous outputs (aliases). Their size is what
+:meth:`servotune.digital.sampled.SampledAxis.alias_fraction` reports; on the bundled axis they
+stay below 1e-6 of the fundamental over the requirements band (``docs/digital_drive.md``).
 
 References
 ----------

@@ -23,8 +23,9 @@ discretised by Tustin with the frequency prewarped to the filter's own.
 :class:`DigitalController`: one discrete state space per rate (python-control systems with a
 sample time), whose inputs are the sampled plant outputs, the references and the held outputs
 of the slower controllers. The same matrices drive the time simulation
-(:mod:`servotune.simulate`), the stability of the multi-rate loop (:mod:`servotune.digital.
-sampled`) and, as transfer functions in z, the frequency responses of the tuning.
+(:mod:`servotune.simulate`), the stability of the multi-rate loop
+(:mod:`servotune.digital.sampled`) and, as transfer functions in z, the frequency responses of
+the tuning.
 
 References
 ----------

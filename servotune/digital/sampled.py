@@ -26,6 +26,7 @@ Systems, 3rd ed. (1997), sec 2.3 (zero-order-hold sampling of a state-space syst
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from functools import cached_property
 
@@ -223,8 +224,8 @@ class ContinuousForm:
     As :class:`DiscreteForm` on the imaginary axis: the balanced modal form, else the modal
     form with ill-conditioned eigenvalues (and those at s = 0) split off into a triangular
     block, each checked against direct Hessenberg solves within 1e-8 of each output's largest
-    response (to any input) at 48 frequencies (24 from 1e-2 to 1e6 rad/s and next to every eigenvalue's
-    frequency), else direct solves at every frequency.
+    response (to any input) at 48 frequencies (24 from 1e-2 to 1e6 rad/s and next to every
+    eigenvalue's frequency), else direct solves at every frequency.
 
     Parameters
     ----------
@@ -594,9 +595,73 @@ class SampledAxis:
         l_low = self.loop_response(loop, np.array([omega[0] / 100.0]))[0]
         return analyse_response(omega, l_jw, l_low)
 
+    def largest_stable_kp(self, ti: float | None = None, rtol: float = 1e-4) -> float:
+        """Return the largest velocity-loop gain Kp [N m s/rad] that keeps the velocity loop
+        stable with the position loop open, at integral time ``ti`` (default the drive's).
+
+        Bisection in log Kp on the multipliers of the lifted loop (:meth:`is_stable` of
+        :meth:`velocity_loop_axis`), from a bracket grown by factors of 2 around the drive's
+        own Kp. (A gain below which the loop is unstable too, as with a friction that falls
+        with speed, is not sought: the result is the upper edge of the stable range that
+        holds the smaller of the drive's Kp and the bracket's lower end.)
+
+        Parameters
+        ----------
+        ti : float, optional
+            Integral time [s].
+        rtol : float
+            Relative width of the final bracket.
+
+        Returns
+        -------
+        float
+            The largest stable Kp (``inf`` when no upper limit is found below 1e6 times the
+            drive's Kp; 0 when even 1e-6 times it is unstable).
+        """
+        from ..drive import PIController
+
+        pi = self.drive.velocity_loop
+        ti = pi.ti if ti is None else float(ti)
+        base = self.velocity_loop_axis()
+
+        def stable(kp):
+            drive = dataclasses.replace(self.drive, velocity_loop=PIController(kp, ti))
+            clone = object.__new__(SampledAxis)
+            clone.__dict__.update({k: v for k, v in base.__dict__.items()
+                                   if k not in ("monodromy", "_stability", "_vel_axis")})
+            ctl = digital_controller(drive)
+            pos = ctl.levels[0]
+            clone.controller = DigitalController(
+                (type(pos)(pos.name, pos.period, pos.every, pos.system, pos.a, 0.0 * pos.b,
+                           pos.c, 0.0 * pos.d, pos.output), *ctl.levels[1:]),
+                ctl.period, ctl.frame)
+            return clone.is_stable()
+
+        lo = hi = pi.kp
+        if stable(lo):
+            while stable(hi):
+                lo, hi = hi, 2.0 * hi
+                if hi > 1e6 * pi.kp:
+                    return math.inf
+        else:
+            while not stable(lo):
+                hi, lo = lo, 0.5 * lo
+                if lo < 1e-6 * pi.kp:
+                    return 0.0
+        while hi / lo > 1.0 + rtol:
+            mid = math.sqrt(lo * hi)
+            lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+        return lo
+
     def velocity_loop_axis(self) -> SampledAxis:
-        """The same axis with the position loop open (Kv so small that it does not act):
-        for the velocity loop's own stability."""
+        """Return the same axis with the position loop open, for the velocity loop's own
+        stability.
+
+        Returns
+        -------
+        SampledAxis
+            The axis whose position controller reads nothing (its output stays zero).
+        """
         if getattr(self, "_vel_axis", None) is None:
             ctl = self.controller
             pos = ctl.level("position")

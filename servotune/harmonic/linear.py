@@ -223,7 +223,18 @@ class SampledPadReceptance:
         return len(self.pads)
 
     def exact(self, omega) -> np.ndarray:
-        """The receptance evaluated directly (no table), shape (n + 1, n + 1, K)."""
+        """Return the receptance evaluated directly (no table).
+
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies [rad/s], > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex, shape (n + 1, n + 1, K), as :meth:`__call__`.
+        """
         return self._axis.response(np.atleast_1d(np.asarray(omega, dtype=float)),
                                    self._inputs, self._outputs)
 

@@ -599,15 +599,26 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
         Recorded cumulative works [J]; filled in place.
     stats : (4,) numpy.ndarray of int64
         Counters, incremented in place.
-    ctl_every, ctl_n, ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, ctl_state, meas_re, meas_im,
-    ref_cols, volt_col, samples_per_step
-        A digital drive's controllers (:func:`controller_arrays`): at the start of every base
-        step that begins a fast sample (every ``samples_per_step`` base steps) the controllers
-        due are computed from the sampled outputs (``meas``, projected on the modes) and the
-        references (columns ``ref_cols`` of ``samples``), and the voltage (known input
-        ``volt_col``) is held over the step; ``ctl_state[0]`` is the position of the last
-        update (a rejected step is redone without a second update). ``samples_per_step`` 0:
-        no controller.
+    ctl_every, ctl_n : numpy.ndarray of int64
+        A digital drive's controllers (:func:`controller_arrays`), slow to fast: fast samples
+        per update and state sizes. At the start of every base step that begins a fast sample
+        (every ``samples_per_step`` base steps) the controllers due are computed from the
+        sampled outputs and the references, and the voltage is held over the step.
+    ctl_a, ctl_b, ctl_c, ctl_d : numpy.ndarray
+        Their matrices, B and D on the vector [measured, references, held outputs].
+    ctl_x, ctl_held : numpy.ndarray
+        Their states and held outputs; updated in place.
+    ctl_state : numpy.ndarray of int64
+        ``[0]``: the position of the last update (a rejected step is redone without a second
+        update); updated in place.
+    meas_re, meas_im : numpy.ndarray
+        The sampled outputs projected on the modes, transposed (m, 3).
+    ref_cols : numpy.ndarray of int64
+        Columns of the references in ``samples`` (-1: absent, read as 0).
+    volt_col : int
+        Column of the held voltage among the known inputs (-1: no controller).
+    samples_per_step : int
+        Base steps per fast sample (0: no controller).
 
     Returns
     -------

@@ -555,8 +555,19 @@ class ResponseModel:
         return self.data.omega
 
     def at(self, design: Design) -> ResponseModel:
-        """The model with a digital drive's corrections exact at ``design`` (itself when they
-        are, or when the drive is continuous)."""
+        """Return the model with a digital drive's corrections exact at ``design``.
+
+        Parameters
+        ----------
+        design : Design
+            The design.
+
+        Returns
+        -------
+        ResponseModel
+            Itself when the corrections already are (or the drive is continuous), else a copy
+            with them recomputed.
+        """
         if not self.data.sampled or design == self.reference:
             return self
         out = object.__new__(ResponseModel)

@@ -2,8 +2,12 @@
 
 A viscous guide-way damper C resists feeding: its force C v adds to the process force,
 friction and acceleration the motor must supply. Each case of the budget
-(:class:`servotune.thrust.ThrustBudget`: feeding at each feed speed, rapid traverse,
-acceleration) is a row linear in C: ``(F_fix + C v) / F_usable <= 1``.
+(:class:`servotune.thrust.ThrustBudget`: accelerating to rapid speed against the peak thrust,
+traversing at rapid speed and feeding at each feed speed against the continuous thrust) is a row
+linear in C: ``(F_fix + C v) / F_usable(v) <= 1``, with the usable thrust of the motor's
+torque-speed curve taken at the case's speed v (a constant for the given design variables, so
+the row stays affine in C). Together the rows bound C by
+:meth:`servotune.thrust.ThrustBudget.c_max`, the minimum over the cases.
 """
 
 from __future__ import annotations
@@ -26,7 +30,8 @@ class ThrustBudget(Requirement):
 
     @classmethod
     def design_rows(cls, problem, value) -> list:
-        """Return ``(F_fix + C v) / F_usable <= 1`` for each case with a speed, C free."""
+        """Return ``(F_fix + C v) / F_usable(v) <= 1`` for each case with a speed, C free
+        (the cases of :meth:`servotune.thrust.ThrustBudget.linear_form`)."""
         if "c" not in problem.free:
             return []
         return [(f"thrust: {name}", (fixed + value("c") * speed) / usable, -float("inf"), 1.0)
@@ -38,6 +43,6 @@ class ThrustBudget(Requirement):
         return [RequirementCheck(
             cls.name, case.name, case.needed, case.usable, case.fits,
             f"thrust at {case.name}: needs {case.needed / 1e3:.3g} kN of "
-            f"{case.usable / 1e3:.3g} kN usable ({case.thrust_kind}, "
+            f"{case.usable / 1e3:.3g} kN usable ({case.thrust_kind} at {case.speed:.3g} m/s, "
             f"{problem.thrust.margin:.0%} kept in reserve)")
             for case in problem.thrust.cases(design.c)]
