@@ -4,7 +4,7 @@ Case: ``models/paper_x_axis`` with the free variables of its ``[tuning]`` (C, Kv
 every regime model the axis works in (standing: presliding and the describing function at the
 process amplitude; feeding at each feed speed: LuGre linearised about sliding), set up as
 ``servotune tune`` sets it up (``servotune.design.tuning_problem`` with the axis' settings: the
-digital drive's delays, the thrust budget). The problem is the NLP of
+digital drive as the sampled-data system it is, the thrust budget). The problem is the NLP of
 :mod:`servotune.tuning.nlp`::
 
     minimise    max_m t_m + mean_weight mean_m t_m  +  tracking_weight Kv0/Kv
@@ -19,8 +19,8 @@ digital drive's delays, the thrust budget). The problem is the NLP of
 All methods work in the same log-scaled variables ``u = log(x / x0)`` within the same bounds.
 
 * ``casadi``: :func:`servotune.tuning.tune` as shipped (IPOPT, exact derivatives, grid exchange,
-  several starts; its time includes its own python-control verification of the initial and the
-  final design in every regime model).
+  several starts; its time includes its own verification, :func:`servotune.tuning.verify`, of
+  the initial and the final design in every regime model).
 * ``scipy_de``: ``scipy.optimize.differential_evolution`` with
   ``constraints=NonlinearConstraint(...)`` (Lampinen's feasibility rules: no penalty weight),
   default polish (trust-constr).
@@ -30,22 +30,38 @@ All methods work in the same log-scaled variables ``u = log(x / x0)`` within the
   restarted from its own result until it stops improving; constraints by an exact (L1) penalty
   ``f + rho * sum(max(0, 1 - g_i))`` with rho = 10, unstable designs get +inf.
 
-The scipy objective evaluates :class:`servotune.tuning.ResponseModel` (the same port-coupled
-responses as casadi, numerically, with the digital drive's delays exact) on ONE fixed log grid
-over the loop band (``--grid`` points; the compliance is taken on its part inside the objective
-band), so a design costs one call; the gated rows are those of the NLP (the same gate constants,
-:func:`servotune.tuning.nlp.gate_parameters`), with the ratio of the position loop's bandwidth to
-Kv taken from the design itself (casadi updates it between its exchange rounds); h0 and s0 are
-the NLP's scale factors at casadi's reference start. Stability, which casadi keeps by continuity
-from stable starts and checks by the poles of the python-control plant, is checked here on every
-design by the eigenvalues of each model's closed-loop state matrix: that matrix is multi-affine in
-the design, ``A = A0 + c A1 + Kv A2 + Kp A3 + Kp/Ti A4 + Kp Kv A5`` (the tuner's own
-:class:`servotune.tuning.solve.ClosedLoopMatrices`, whose deviation from ``build_plant`` at two
-random designs is reported), with the criterion of ``require_stable``, so the check costs one
-eigenvalue problem per model instead of an interconnection.
+The scipy methods evaluate exactly the functions casadi optimises. The responses are those of
+:class:`servotune.tuning.ResponseModel`, the port model of the NLP evaluated numerically (the
+same code builds casadi's kernels): the structure's port receptances coupled with each model's
+contact, and, for the digital drive, the sampled-data loop (:mod:`servotune.digital.cascade`:
+the zero-order hold of the voltage, the controllers' difference equations at their own rates,
+the velocity and position loops lifted) with its per-model corrections (the hold's aliases and
+the lifts' higher terms, :func:`servotune.tuning.ports.sampled_corrections`) computed once at
+casadi's reference start and frozen there (``ResponseModel(problem, omega, reference)`` called
+with ``exact=False``), as casadi freezes them at that start for its whole run. They are taken on
+ONE fixed log grid over the loop band (``--grid`` points; the compliance on its part inside the
+objective band), so a design costs one call; the gated rows are those of the NLP (the same gate
+constants, :func:`servotune.tuning.nlp.gate_parameters`), with the ratio of the position loop's
+bandwidth to Kv taken from the design itself (casadi updates it between its exchange rounds);
+h0 and s0 are the NLP's scale factors at casadi's reference start. How far the frozen
+corrections are from the exact ones at casadi's final design is reported.
 
-Every final design is judged by ONE common evaluator: :func:`servotune.tuning.verify`
-(python-control on dense grids none of the methods used) and
+Stability is decided by the tuner's own check, :func:`servotune.tuning.solve.model_stability`:
+for the digital drive the sampled-data closed loop of each model
+(:class:`servotune.digital.SampledAxis`: the plant discretised under the zero-order hold, the
+controllers' difference equations, the monodromy matrix over the position period; stable when
+every multiplier lies inside the unit circle, with the rounding allowance of
+``require_stable``). casadi keeps stability by continuity from stable starts and runs that
+check on its starts and on every converged solution; the scipy methods have no such
+continuity (differential evolution draws designs anywhere within the bounds), so they run it on
+every design they evaluate: one eigenvalue problem of the monodromy matrix per model. Its share
+of each scipy method's time is reported, and the speedup without it
+(``speedup_without_stability_checks``) beside the speedup.
+
+Every final design is judged by ONE common evaluator: :func:`servotune.tuning.verify` (each
+model's closed loop built anew, for the digital drive the exact sampled-data system,
+:class:`servotune.digital.SampledAxis`, with no frozen corrections; its stability, compliance
+and loops on dense grids none of the methods used) and
 :func:`servotune.tuning.requirement_checks` (every requirement in every model, as the design job
 judges it), plus the objective formula on the verified peaks.
 
@@ -83,39 +99,36 @@ from scipy.special import expit  # noqa: E402
 from servotune.axis import load_axis  # noqa: E402
 from servotune.design import tuning_problem  # noqa: E402
 from servotune.drive import current_loop_bandwidth  # noqa: E402
-from servotune.frequency import is_stable_matrix  # noqa: E402
 from servotune.tuning import Design, ResponseModel, requirement_checks, tune, verify  # noqa: E402
 from servotune.tuning import solve as tuning_solve  # noqa: E402
 from servotune.tuning.nlp import GATE_SHARPNESS, gate_parameters  # noqa: E402
-from servotune.tuning.solve import ClosedLoopMatrices  # noqa: E402
+from servotune.tuning.ports import is_sampled  # noqa: E402
+from servotune.tuning.solve import model_stability  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO = 10.0
 
 
-class ClosedLoopMatrix:
-    """Stability of every regime model from the closed-loop state matrices in their exact
-    multi-affine form (:class:`servotune.tuning.solve.ClosedLoopMatrices`, as the tuner uses
-    them), with the largest deviation from ``build_plant`` at a few random designs reported."""
+class Stability:
+    """Closed-loop stability of a design in every regime model by the tuner's own check
+    (:func:`servotune.tuning.solve.model_stability`: the sampled-data loop's monodromy
+    multipliers for a digital drive), with the number of checks and the time they took."""
 
-    def __init__(self, problem, rng):
-        if problem.drive is None:
-            raise ValueError("the benchmark assumes an axis with a drive")
-        self.matrices = ClosedLoopMatrices(problem)
-        if not self.matrices.exact:
-            raise RuntimeError("A(design) is not multi-affine here")
-        self.fit_error = 0.0
-        for _ in range(2):
-            d = replace(problem.initial_design(), **{
-                v: float(math.exp(rng.uniform(*np.log(problem.bounds[v])))) for v in problem.free})
-            for a, model in zip(self.matrices(d), problem.regimes, strict=True):
-                exact = self.matrices.build(model, d).A
-                self.fit_error = max(self.fit_error,
-                                     float(np.abs(a - exact).max() / np.abs(exact).max()))
+    def __init__(self, problem):
+        self.problem = problem
+        self.calls = 0
+        self.time_s = 0.0
 
     def stable(self, d: Design) -> bool:
-        """Every model stable (the criterion of ``servotune.frequency.require_stable``)."""
-        return all(is_stable_matrix(a) for a in self.matrices(d))
+        t0 = time.perf_counter()
+        try:
+            return all(model_stability(self.problem, d))
+        finally:
+            self.calls += 1
+            self.time_s += time.perf_counter() - t0
+
+    def restart(self):
+        self.calls, self.time_s = 0, 0.0
 
 
 def _gate(y):
@@ -125,12 +138,14 @@ def _gate(y):
 class GridObjective:
     """The tuning objective and constraints of a problem on one fixed grid (numpy)."""
 
-    def __init__(self, problem, n_grid: int, closed_loop: ClosedLoopMatrix, reference: Design,
+    def __init__(self, problem, n_grid: int, stability: Stability, reference: Design,
                  current_bandwidth):
         req = problem.requirements
         lo, hi = min(req.band[0], req.loop_band[0]), max(req.band[1], req.loop_band[1])
         self.problem = problem
-        self.model = ResponseModel(problem, np.geomspace(lo, hi, n_grid))
+        # casadi's port model: a digital drive's corrections exact at its reference start and
+        # kept there (called with exact=False below)
+        self.model = ResponseModel(problem, np.geomspace(lo, hi, n_grid), reference)
         w = self.model.omega
         self.in_band = (w >= req.band[0]) & (w <= req.band[1])
         self.in_loop = (w >= req.loop_band[0]) & (w <= req.loop_band[1])
@@ -147,14 +162,14 @@ class GridObjective:
         self.thrust = ([(f, v, u) for f, v, u, _ in problem.thrust.linear_form() if v > 0]
                        if problem.thrust is not None and "c" in self.free else [])
         self.current_bandwidth = current_bandwidth
-        self.closed_loop = closed_loop
+        self.stability = stability
         self.mu = problem.chatter.mu if problem.chatter is not None else 1.0
         # the NLP's scale factors (peak and -min Re(mu G) of the reference start)
         self.h0, self.s0 = tuning_solve._scale_factors(problem, reference)
         self._cache = {}
         self.evaluations = 0
         self.t0 = time.perf_counter()
-        self.history = []  # (elapsed s, best feasible objective so far)
+        self.history = []  # (elapsed s, best feasible objective so far, stability s so far)
 
     def design(self, u) -> Design:
         return replace(self.x0, **{v: float(getattr(self.x0, v) * math.exp(u[i]))
@@ -212,7 +227,7 @@ class GridObjective:
             return self._cache[key]
         self.evaluations += 1
         d = self.design(u)
-        res = self.model(d)
+        res = self.model(d, exact=False)
         h = res["compliance"][self.cut][:, self.in_band]
         f = self.objective_of(d, np.abs(h).max(axis=1), float((self.mu * h.real).min()))
         lv = res["loop_velocity"][:, self.in_loop]
@@ -223,25 +238,32 @@ class GridObjective:
         g += [2.0 - (fixed + d.c * speed) / usable for fixed, speed, usable in self.thrust]
         if self.kv_min > 0:
             g.append(d.kv / self.kv_min)
-        stable = self.closed_loop.stable(d)
+        stable = self.stability.stable(d)
         out = (f, np.array(g), stable)
         if len(self._cache) > 64:
             self._cache.clear()
         self._cache[key] = out
         if stable and np.all(out[1] >= 1.0) and (not self.history or f < self.history[-1][1]):
-            self.history.append((time.perf_counter() - self.t0, f))
+            self.history.append((time.perf_counter() - self.t0, f, self.stability.time_s))
         return out
 
     def restart_clock(self):
         self.t0 = time.perf_counter()
         self.history = []
         self.evaluations = 0
+        self.stability.restart()
+
+    def reached(self, target: float, rtol: float) -> tuple[float, float] | None:
+        """(elapsed s, of which in stability checks s) when the best feasible objective first
+        came within ``rtol`` of ``target``, or None."""
+        for t, f, t_stab in self.history:
+            if f <= target * (1.0 + rtol):
+                return t, t_stab
+        return None
 
     def time_to_reach(self, target: float, rtol: float) -> float | None:
-        for t, f in self.history:
-            if f <= target * (1.0 + rtol):
-                return t
-        return None
+        hit = self.reached(target, rtol)
+        return None if hit is None else hit[0]
 
     # scipy interfaces ------------------------------------------------------------------
     def objective(self, u) -> float:
@@ -258,8 +280,28 @@ class GridObjective:
         return f + RHO * float(np.maximum(0.0, 1.0 - g).sum())
 
 
+def corrections_deviation(grid: GridObjective, design: Design) -> dict:
+    """How far the port model with the corrections frozen at the reference is from the one
+    with them exact at ``design``, on the scipy grid: the largest difference of each response
+    relative to its largest magnitude (the compliance in the objective band, the loops in the
+    loop band), and the objective by the same formula."""
+    if not grid.model.data.sampled:
+        return {}
+    frozen, exact = grid.model(design, exact=False), grid.model(design)
+    parts = {"compliance": grid.in_band, "loop_velocity": grid.in_loop,
+             "loop_position": grid.in_loop}
+    out = {}
+    for key, sel in parts.items():
+        a, b = frozen[key][:, sel], exact[key][:, sel]
+        out[key] = float(np.nanmax(np.abs(a - b)) / np.nanmax(np.abs(b)))
+    h = exact["compliance"][grid.cut][:, grid.in_band]
+    out["objective_exact_corrections"] = grid.objective_of(
+        design, np.abs(h).max(axis=1), float((grid.mu * h.real).min()))
+    return out
+
+
 def common_evaluation(grid: GridObjective, design: Design) -> dict:
-    """The independent evaluator: python-control verification in every regime model, every
+    """The independent evaluator: :func:`servotune.tuning.verify` in every regime model, every
     requirement check, and the objective formula on the verified peaks."""
     problem = grid.problem
     perf = verify(problem, design)
@@ -307,6 +349,7 @@ def run_de(grid: GridObjective, budget: float, seed: int, popsize: int):
         callback=callback)
     return res.x, time.perf_counter() - grid.t0, {
         "message": str(res.message), "generations": int(res.nit), "evaluations": grid.evaluations,
+        "stability_checks": grid.stability.calls, "stability_checks_s": grid.stability.time_s,
         "stopped_by_budget": state["stopped"], "polish": "trust-constr (scipy default)"}
 
 
@@ -332,6 +375,7 @@ def run_nm(grid: GridObjective, starts, budget: float):
             best = (u, f)
     return best[0], time.perf_counter() - grid.t0, {
         "evaluations": grid.evaluations, "nelder_mead_runs": restarts,
+        "stability_checks": grid.stability.calls, "stability_checks_s": grid.stability.time_s,
         "penalty": f"exact L1, rho = {RHO}", "stopped_by_budget":
             time.perf_counter() - grid.t0 > budget}
 
@@ -358,8 +402,8 @@ def main(argv=None):
     problem = tuning_problem(axis, settings.free, settings.chatter_weight, settings.bounds)
 
     # casadi ---------------------------------------------------------------------------
-    # the time tune() spends in its own python-control verification (initial and final
-    # design) is measured by wrapping the module's verify
+    # the time tune() spends in its own verification (initial and final design) is measured
+    # by wrapping the module's verify
     spent = {"verify_s": 0.0}
 
     def timed_verify(*a):
@@ -385,13 +429,15 @@ def main(argv=None):
     t_verify = time.perf_counter() - t0
 
     # scipy ----------------------------------------------------------------------------
+    # casadi's reference start: its objective's scale and where its port model's sampled-data
+    # corrections are exact (and kept)
+    reference = result.start or result.initial
     t0 = time.perf_counter()
-    closed_loop = ClosedLoopMatrix(problem, np.random.default_rng(12345))
-    grid = GridObjective(problem, args.grid, closed_loop, result.start or result.initial,
-                         current_bw)
+    grid = GridObjective(problem, args.grid, Stability(problem), reference, current_bw)
     t_setup = time.perf_counter() - t0
     casadi_on_grid = grid.values(grid.u_of(result.design))
     target = casadi_on_grid[0]
+    frozen_deviation = corrections_deviation(grid, result.design)
 
     evaluations = {"casadi": common_evaluation(grid, result.design)}
     evaluations["casadi"].update(time_s=t_casadi, cpu_s=cpu_casadi,
@@ -420,13 +466,22 @@ def main(argv=None):
         ev = common_evaluation(grid, grid.design(u))
         ev.update(time_s=t, cpu_s=cpu, setup_s=t_setup, objective_on_scipy_grid=f,
                   feasible_on_scipy_grid=bool(stable and np.all(g >= 1 - 1e-9)), **info, **reach)
-        t_equal = grid.time_to_reach(target, args.match)
+        hit = grid.reached(target, args.match)
+        t_equal = None if hit is None else hit[0]
         ev["speedup"] = (t_equal / t_casadi) if t_equal is not None else None
         ev["speedup_lower_bound"] = None if t_equal is not None else t / t_casadi
         t_opt = t_casadi - spent["verify_s"]
         ev["speedup_optimisation_only"] = (t_equal / t_opt) if t_equal is not None else None
         ev["speedup_optimisation_only_lower_bound"] = None if t_equal is not None else t / t_opt
-        ev["best_feasible_history"] = [[round(a, 3), b] for a, b in history]
+        # the same with the scipy method's time in stability checks taken out
+        t_plain = (hit[0] - hit[1]) if hit is not None else t - info["stability_checks_s"]
+        ev["time_to_casadi_objective_without_stability_checks_s"] = (
+            None if hit is None else t_plain)
+        ev["speedup_without_stability_checks"] = (t_plain / t_casadi) if hit is not None else None
+        ev["speedup_without_stability_checks_lower_bound"] = (
+            None if hit is not None else t_plain / t_casadi)
+        ev["stability_share_of_time"] = info["stability_checks_s"] / t if t > 0 else None
+        ev["best_feasible_history"] = [[round(a, 3), b] for a, b, _ in history]
         evaluations[name] = ev
 
     speedups = [ev["speedup"] or ev["speedup_lower_bound"]
@@ -447,9 +502,16 @@ def main(argv=None):
         "time_one_verification_s": t_verify,
         "baseline": "scipy differential_evolution and Nelder-Mead on the same objective and "
                     "constraints (one fixed grid), time to casadi's objective",
+        "model": ("port model (ResponseModel) with the digital drive's sampled-data corrections "
+                  "frozen at casadi's reference start, as casadi; stability by "
+                  "servotune.tuning.solve.model_stability (SampledAxis monodromy) on every "
+                  "design" if is_sampled(problem) else
+                  "port model (ResponseModel) of the continuous drive; stability by "
+                  "servotune.tuning.solve.model_stability on every design"),
+        "drive_sampled": is_sampled(problem),
         "scipy_grid_points": args.grid,
         "match_rtol": args.match,
-        "closed_loop_fit_error": closed_loop.fit_error,
+        "frozen_corrections_deviation_at_casadi_design": frozen_deviation,
         "speedup": min(speedups) if speedups else None,
         "speedup_is_lower_bound": any(ev.get("speedup") is None
                                       for k, ev in evaluations.items() if k != "casadi"),
@@ -480,8 +542,12 @@ def main(argv=None):
             else:
                 print(f"  {name}: does not reach casadi's objective (rtol {args.match:g}) "
                       f"within {ev['time_s']:.0f} s: speedup > {ev['speedup_lower_bound']:.1f} x")
+        for name, ev in evaluations.items():
+            if name != "casadi":
+                print(f"  {name}: {ev['stability_checks']} stability checks took "
+                      f"{ev['stability_checks_s']:.1f} s of its {ev['time_s']:.1f} s")
         print(f"  casadi: {t_casadi:.2f} s in all, of which {spent['verify_s']:.2f} s in its "
-              f"own python-control verification (2 designs, every regime model); load average "
+              f"own verification (2 designs, every regime model); load average "
               f"{load_start:.1f} -> {os.getloadavg()[0]:.1f}")
     return out
 

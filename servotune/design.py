@@ -378,9 +378,10 @@ def mode_peaks_vs_damping(axis: Axis, c_values, drive=None, c_chosen: float | No
     ``H(s) = sum_i R_i / (s - lambda_i)``; a mode's own peak is ``|R_i| / |Re lambda_i|``
     (its pair's term at resonance). A digital drive's loop is a sampled-data system without
     poles in s: there the local maxima of its compliance (1500 log-spaced points from 1 Hz to
-    1.5 ``f_max_hz``) are the modes' peaks, at their frequencies. The modes are chosen at the design's C (the ``keep``
-    largest peaks below ``f_max_hz`` that reach ``significance`` times the largest) and
-    followed outwards in C by the nearest pole; a mode that turns over-damped or jumps by more
+    1.5 ``f_max_hz``) are the modes' peaks, at their frequencies. The modes are chosen at the
+    design's C (the ``keep`` largest peaks below ``f_max_hz`` that reach ``significance`` times
+    the largest) and followed outwards in C by the nearest pole; a mode that turns over-damped
+    or jumps by more
     than half its frequency ends its track (NaN). The design's C is added to the grid.
 
     Parameters

@@ -21,7 +21,8 @@ damping, for example hydrostatic guides). A model's contact impedance at the pad
 
 Friction is never known exactly: :func:`friction_samples` gives the corners of a spread of the
 identified parameters (by default the spread the paper measured over six tests), each a further
-model of every regime.
+model of every regime; :class:`FrictionSpread` is the box of such a spread, whose every corner
+the nonlinear verdict checks (:mod:`servotune.verdict`).
 
 References
 ----------
@@ -34,8 +35,11 @@ Automatic Control 40(3) (1995) 419-425 (LuGre; linearisations).
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import control
 import numpy as np
@@ -48,6 +52,8 @@ from .validation import positive
 
 __all__ = [
     "REGIME_KINDS",
+    "SPREAD_PARAMETERS",
+    "FrictionSpread",
     "Operation",
     "RegimeModel",
     "friction_samples",
@@ -56,6 +62,8 @@ __all__ = [
 ]
 
 REGIME_KINDS = ("presliding", "describing", "sliding", "viscous")
+#: The LuGre parameters a friction spread may vary, with their units.
+SPREAD_PARAMETERS = MappingProxyType({"fc": "N", "fs": "N", "sigma0": "N/m", "sigma1": "N s/m"})
 
 
 @dataclass(frozen=True)

@@ -31,17 +31,17 @@ def test_init_writes_a_loadable_axis_and_refuses_to_overwrite(tmp_path, capsys):
 
 
 def test_whole_path_on_a_small_axis(starter, tmp_path, capsys):
-    # init -> tune (with the nonlinear verdict) -> results.json + report.html. The starter's
-    # tuned design holds its linear checks and every simulated sweep, but while feeding at
-    # 20 mm/s with 3 x the process force the pads reverse and slip each cycle near 147 Hz: the
-    # periodic response peaks about 56 % above the sliding model's claim (a resonance with
-    # turning points the sweep passes through); the verdict says so and the command exits 1.
-    # tests/test_verdict_harmonic.py confirms that peak by a stepped sine.
+    # init -> tune (with the nonlinear verdict) -> results.json + report.html. Tuned on the
+    # sampled-data model of its digital drive, the starter's design holds its linear checks,
+    # every simulated sweep and the harmonic-balance scan: feeding at 20 mm/s with 3 x the
+    # process force the pads still reverse and slip each cycle near 147 Hz (the resonance
+    # tests/test_verdict_harmonic.py confirms by a stepped sine), but its periodic response
+    # now stays within the 30 % tolerance of the claim; the command exits 0.
     out = tmp_path / "report"
     assert main(["tune", str(starter), "--out", str(out), "--starts", "2", "--workers", "1",
-                 "--json"]) == 1
+                 "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["verified"] is False and result["status"] == "not verified"
+    assert result["verified"] is True and result["status"] == "verified"
     folder = out / f"tune_{result['axis_name']}"
     saved = json.loads((folder / "results.json").read_text())
     assert saved["design"] == result["design"]
@@ -54,11 +54,13 @@ def test_whole_path_on_a_small_axis(starter, tmp_path, capsys):
         assert regime["nonlinear_peak_after_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]
         sweeps = [s for s in regime["simulations"] if s["kind"] == "sweep"]
         assert sweeps and all(not s["at_edge"] and s["decays"] for s in sweeps)
-    failing = [r for r in result["regimes"] if not r["holds"]]
-    assert [r["name"] for r in failing] == ["feeding 20 mm/s"]
-    assert "harmonic balance finds" in failing[0]["reason"]
-    worst = max(failing[0]["harmonic_balance"], key=lambda h: h["peak_m_per_n"])
-    assert worst["peak_m_per_n"] > 1.3 * failing[0]["claimed_peak_m_per_n"]
+        assert regime["holds"], regime["reason"]
+        for h in regime["harmonic_balance"]:
+            assert h["peak_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]
+    feeding = next(r for r in result["regimes"] if r["name"] == "feeding 20 mm/s")
+    worst = max(feeding["harmonic_balance"], key=lambda h: h["peak_m_per_n"])
+    assert 120.0 < worst["resonance_hz"] < 170.0   # the slipping pads' resonance
+    assert worst["peak_m_per_n"] > feeding["claimed_peak_m_per_n"]
     assert result["peak_compliance_after"] == max(r["claimed_peak_m_per_n"]
                                                   for r in result["regimes"])
     # the linear checks hold: the thrust budget and the hierarchy of the loops

@@ -278,7 +278,7 @@ def test_hessian_given_to_ipopt_matches_finite_differences_of_the_port_model(act
     lam_f = 0.8 if active == "objective and peak" else 0.0
     keep = {"objective and peak": ["compliance peak", "worst peak"], "chatter": ["chatter"],
             "Ms loops": ["Ms velocity loop", "Ms position loop"],
-            "gated loops": ["loop hierarchy", "Ti bandwidth min", "Ti bandwidth max",
+            "gated loops": ["loop hierarchy", "Ti bandwidth min",
                             "current loop above"],
             "kv_min and thrust": ["kv_min", "thrust: rapid traverse",
                                   "thrust: feeding 30 mm/s"]}[active]

@@ -4,10 +4,12 @@ Variables (log-scaled, ``u_v = log(x_v / x_v0)`` for each free design variable x
 Kv, Kp, Ti), the epigraph variables of the objective, and the data of the frequency grids as
 parameters (one column per frequency and regime model; see :mod:`servotune.tuning.ports`)::
 
-    minimise    w_p (t + mu mean_m t_m) + w_c q + w_t Kv0 / Kv + w_C (C - C_lo) / C_span
+    minimise    w_p (t + mu mean_m t_m + eps mean_k t_k) + w_c q + w_t Kv0 / Kv
+                + w_C (C - C_lo) / C_span
 
     subject to  |h_m(w)|^2 / h0^2 <= t_m^2          every cutting model m, band frequency w
-                t_m <= t
+                t_m <= t                              every movable model m
+                t_k <= cap_k / h0                     every held model k
                 mu_d Re h_m(w) / s0 + q >= 0         (chatter: b_crit = 1 / (2 Kt s0 q))
                 Ms_v^2 |1 + L_v,m(w)|^2 >= 1         every model m, loop frequency w
                 Ms_p^2 |1 + L_p,m(w)|^2 >= 1
@@ -18,6 +20,12 @@ parameters (one column per frequency and regime model; see :mod:`servotune.tunin
                             (the last four in every moving model m: sliding or viscous pads)
                 F_fix,j + C v_j <= (1 - margin) F_avail,j      every thrust case j
                 Kv >= Kv_min,  bounds on every u_v
+
+The models the free variables cannot move (found before the solve, see
+:func:`servotune.tuning.solve.held_models`: a standing regime whose pads stick, for one) are
+*held*: capped at their value instead of setting the worst peak, and weighted last (eps =
+:data:`HELD_WEIGHT`): the objective is lexicographic over the regimes, first the worst peak of
+the models the design can move, then their mean, then the held ones.
 
 The rows after the epigraph rows are the registered requirements' (one module each in
 :mod:`servotune.tuning.requirements`, see :mod:`servotune.tuning.constraint`): their loop rows
@@ -62,8 +70,12 @@ from .gates import GATE_SAFETY, GATE_SHARPNESS
 from .ports import SymbolicPorts, responses
 from .problem import VARIABLES, Design, TuningProblem
 
-__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "ColumnMap", "Kernels", "Solver", "Solution",
-           "gate_parameters", "cache_folder"]
+__all__ = ["GATE_SHARPNESS", "GATE_SAFETY", "HELD_WEIGHT", "ColumnMap", "Kernels", "Solver",
+           "Solution", "gate_parameters", "cache_folder"]
+
+#: Weight of the held models' mean peak in the objective (relative to the worst movable one):
+#: third in the lexicographic order, after the worst and the mean of the movable models.
+HELD_WEIGHT = 1e-3
 
 
 def gate_parameters(problem: TuningProblem, gamma: np.ndarray,
@@ -177,6 +189,7 @@ class Kernels:
 
     def __init__(self, problem: TuningProblem, h0: float, s0: float):
         self._maps: dict[str, ColumnMap] = {}
+        self.h0, self.s0 = h0, s0
         x0 = problem.initial_design()
         free = problem.free
         u = ca.SX.sym("u", len(free))
@@ -395,8 +408,12 @@ class Solver:
         if w_chatter > 0:
             add(band[row, :].T + q[0], 0.0, ca.inf, "chatter", band_models, band_cols)
             weights_band.append("chatter")
+        held = [cut.index(m) for m in problem.held if m in cut]
+        movable = [i for i in range(len(cut)) if i not in held]
+        self.held, self.movable = held, movable
         if w_peak > 0:
-            add(tt[0] - tt[1:], 0.0, ca.inf, "worst peak")
+            # the worst peak over the models the design can move (the held ones are capped)
+            add(tt[0] - tt[[1 + i for i in movable]], 0.0, ca.inf, "worst peak")
         data_loop = None
         if kernels.loop is not None:
             n_rows_loop = kernels.loop.size1_in(1)
@@ -423,7 +440,11 @@ class Solver:
                 add(ca.vertcat(expr), lo, hi, name)
         objective = 0
         if w_peak > 0:
-            objective = w_peak * (tt[0] + problem.mean_weight * ca.sum1(tt[1:]) / len(cut))
+            t_mov = tt[[1 + i for i in movable]]
+            objective = w_peak * (tt[0] + problem.mean_weight * ca.sum1(t_mov) / len(movable))
+            if held:
+                objective = objective + w_peak * HELD_WEIGHT * ca.sum1(
+                    tt[[1 + i for i in held]]) / len(held)
         if w_chatter > 0:
             objective = objective + w_chatter * q[0]
         if "kv" in free and problem.tracking_weight > 0:
@@ -456,6 +477,10 @@ class Solver:
         hi = [math.log(problem.bounds[v][1] / self.scale[v]) for v in free]
         self.lbx = np.array([*lo, *([0.0] * n_t), *([-ca.inf] * n_q)])
         self.ubx = np.array([*hi, *([ca.inf] * n_t), *([ca.inf] * n_q)])
+        if n_t:
+            for i in held:
+                cap = problem.held_caps[list(problem.held).index(cut[i])]
+                self.ubx[nf + 1 + i] = cap / kernels.h0
 
     def _hessian(self, x, p, tt, objective, g, rest_start, data_band, data_loop, masks,
                  weights_band, n_cut, n_models):
@@ -623,7 +648,9 @@ class Solver:
         if self.n_t:
             per_model = band[row].reshape(len(self.problem.cutting_models), -1)
             per = np.sqrt(np.maximum(per_model.max(axis=1), 0.0))
-            out += [float(per.max()), *per.tolist()]
+            nf = len(self.free)
+            per = np.minimum(per, self.ubx[nf + 1:nf + 1 + per.size])
+            out += [float(per[self.movable].max()), *per.tolist()]
             row += 1
         if self.n_q:
             out.append(float(-band[row].min()))

@@ -219,6 +219,12 @@ class TuningProblem:
         Work-piece DOF where the cutting force acts and the compliance is taken.
     n_grid : int
         Initial number of grid frequencies (the exchange refinement adds more).
+    held : tuple of int
+        Cutting models (indices into ``regimes``) the free variables cannot move: they are
+        held at ``held_caps`` [m/N] instead of entering the worst peak (the lexicographic
+        objective of :func:`servotune.tuning.solve.tune`).
+    held_caps : tuple of float
+        Their caps [m/N], one per held model.
 
     Raises
     ------
@@ -248,6 +254,8 @@ class TuningProblem:
     c_cost_weight: float = 0.02
     force: str = "wp.x"
     n_grid: int = 60
+    held: tuple[int, ...] = ()
+    held_caps: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         regimes = tuple(self.regimes)

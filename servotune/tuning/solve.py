@@ -52,6 +52,7 @@ from .problem import (
 from .verify import Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = ["TuningResult", "TuningStatistics", "Prediction", "StartSet", "StartsOutcome",
+           "HeldModel", "held_models",
            "ExchangeOutcome", "ClosedLoopMatrices", "stable_starts", "model_stability",
            "solve_starts",
            "exchange_grids", "predict", "tune"]
@@ -109,6 +110,9 @@ class TuningResult:
     notes: tuple[str, ...] = ()
     """Remarks on how the design was reached (e.g. the initial design kept because the
     optimiser found no better one)."""
+    held: tuple = ()
+    """The cutting models the free variables cannot move (:class:`HeldModel`), held at their
+    value by the lexicographic objective."""
 
 
 # ----------------------------------------------------------------------- 1. starting points
@@ -800,6 +804,104 @@ def _kept_models(problem: TuningProblem, start_set: StartSet):
     return problem, excluded
 
 
+#: A cutting model whose peak moves less than this (relative) per unit of log of every free
+#: variable is held (see :func:`held_models`).
+HOLD_SENSITIVITY = 1e-3
+#: A held model may end this much (relative) above its value at the reference start.
+HOLD_SLACK = 2e-3
+
+
+@dataclass(frozen=True)
+class HeldModel:
+    """A cutting model the free variables cannot move, held at its value.
+
+    Attributes
+    ----------
+    model : RegimeModel
+        The model.
+    peak : float
+        Its compliance peak at the reference start [m/N].
+    sensitivity : float
+        The largest ``|d log peak / d log x|`` over the free variables x.
+    reason : str
+        Why (the numbers and what sets the peak).
+    """
+
+    model: object
+    peak: float
+    sensitivity: float
+    reason: str
+
+    def to_dict(self) -> dict:
+        """Return the held model JSON-ready.
+
+        Returns
+        -------
+        dict
+            ``model``, ``regime``, ``peak_m_per_n``, ``sensitivity``, ``reason``.
+        """
+        return {"model": self.model.name, "regime": self.model.regime,
+                "peak_m_per_n": self.peak, "sensitivity": self.sensitivity,
+                "reason": self.reason}
+
+
+def held_models(problem: TuningProblem, design: Design, step: float = 0.1,
+                n_points: int = 800) -> tuple[HeldModel, ...]:
+    """Return the cutting models whose compliance peak the free variables cannot move.
+
+    Each free variable is moved by a factor ``exp(+-step)`` from ``design``; a model whose peak
+    (on ``n_points`` log-spaced frequencies over the band, the port model exact at each design)
+    changes by less than :data:`HOLD_SENSITIVITY` times ``step`` for every variable is held.
+    When every cutting model would be held, none is (the worst peak then sets the objective as
+    before).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem.
+    design : Design
+        Where the sensitivities are taken (the reference start).
+    step : float
+        The log step.
+    n_points : int
+        Band frequencies.
+
+    Returns
+    -------
+    tuple of HeldModel
+    """
+    if problem.weights[0] <= 0:
+        return ()
+    cut = list(problem.cutting_models)
+    omega = grid(*problem.requirements.band, n_points)
+    model = ResponseModel(problem, omega, design)
+
+    def peaks(d):
+        return np.abs(model(d)["compliance"][cut]).max(axis=1)
+
+    base = peaks(design)
+    sens = np.zeros(len(cut))
+    for v in problem.free:
+        lo, hi = (dataclasses.replace(design, **{v: getattr(design, v) * math.exp(s)})
+                  for s in (-step, step))
+        sens = np.maximum(sens, np.abs(np.log(peaks(hi) / peaks(lo))) / (2 * step))
+    held = [i for i in range(len(cut)) if sens[i] < HOLD_SENSITIVITY]
+    if len(held) == len(cut):
+        return ()
+    out = []
+    for i in held:
+        m = problem.regimes[cut[i]]
+        what = ("the guide ways stick: the presliding contact (sigma0) holds the pads, so "
+                "the drive and the viscous C in parallel barely reach the work-piece mode"
+                if m.kind in ("presliding", "describing") else
+                "the design variables barely reach the mode that sets it")
+        out.append(HeldModel(m, float(base[i]), float(sens[i]),
+                             f"{m.name}: its peak {base[i]:.4g} m/N moves by at most "
+                             f"{100 * sens[i] * step:.2g} % when any free variable changes by "
+                             f"{100 * (math.exp(step) - 1):.0f} % ({what}); held there"))
+    return tuple(out)
+
+
 @one_thread
 def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: int = 30,
          tolerance: float = 1e-6, callback=None) -> TuningResult:
@@ -859,6 +961,13 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     problem, excluded = _kept_models(problem, start_set)
     before = verify(problem, x0)
     reference = start_set.designs[0]
+    # the lexicographic objective: the models no free variable moves are held at their value
+    held = held_models(problem, reference)
+    if held:
+        index = {id(m): i for i, m in enumerate(problem.regimes)}
+        problem = dataclasses.replace(
+            problem, held=tuple(index[id(h.model)] for h in held),
+            held_caps=tuple(h.peak * (1.0 + HOLD_SLACK) for h in held))
     h0, s0 = _scale_factors(problem, reference)
     kernels = Kernels(problem, h0, s0)
     gamma = _gamma(problem, reference,
@@ -877,7 +986,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         return TuningResult(
             problem=problem, initial=x0, design=x0, before=before, after=before,
             predicted=predict(problem, x0), success=True, reasons=(), active=(),
-            checks=checks0, excluded=excluded, start=reference,
+            checks=checks0, excluded=excluded, start=reference, held=held,
             notes=(f"the optimiser found no better design than the initial one ({why}); the "
                    "initial design is kept: it meets every requirement in the dense check. "
                    "More starts (--starts) or other bounds may find a better one",),
@@ -907,7 +1016,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     return TuningResult(
         problem=problem, initial=x0, design=ex.design, before=before, after=after,
         predicted=pred, success=not reasons, reasons=tuple(reasons), active=tuple(active),
-        checks=checks, excluded=excluded, start=reference,
+        checks=checks, excluded=excluded, start=reference, held=held,
         stats=_statistics(n_starts, phase.polished, phase.iterations + ex.iterations,
                           ex.rounds, ex.grids, problem, ex.best.stats["return_status"],
                           current_bw, t_start))
