@@ -41,6 +41,7 @@ Every error names the file, the field and what to do about it.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import tomllib
@@ -64,7 +65,7 @@ from .drive import (
 from .friction.guideway import GuideWayFriction
 from .friction.identify import fit_steady_state, read_friction_csv
 from .friction.law import friction_law, friction_law_names
-from .regimes import Operation
+from .regimes import SPREAD_PARAMETERS, FrictionSpread, Operation, friction_spread
 from .requirements import Requirements
 from .structure.io import MatrixFileError, read_coordinates, read_structure
 from .structure.model import ModalModel, UnknownDofError
@@ -156,13 +157,18 @@ class TuningSettings:
     the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`);
     ``friction_samples`` are further samples ``(label, {parameter: value})``, e.g. a study's
     worst (:func:`servotune.study.spread.spread_from_study`, ``servotune tune --spread-from``).
+    ``friction_variation`` maps fc, fs, sigma0, sigma1 to the identified friction's own
+    variation, +- values in SI units (``[friction] variation``, or a named set's measured one):
+    the nonlinear verdict checks the corners of ``friction_spread`` when given, else of it
+    (:func:`servotune.regimes.friction_spread`).
 
     Raises
     ------
     ValueError
         Free names that are not distinct names among c, kv, kp, ti; bounds that are not
         0 < low < high; a chatter weight outside [0, 1]; a spread or samples that
-        :func:`servotune.regimes.friction_samples` refuses.
+        :func:`servotune.regimes.friction_samples` refuses; a variation of another parameter
+        or not finite and > 0.
     """
 
     free: tuple[str, ...] = ("c", "kv", "kp", "ti")
@@ -170,6 +176,7 @@ class TuningSettings:
     chatter_weight: float = 0.0
     friction_spread: Mapping = field(default_factory=lambda: MappingProxyType({}))
     friction_samples: tuple = ()
+    friction_variation: Mapping = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self) -> None:
         names = ("c", "kv", "kp", "ti")
@@ -205,6 +212,14 @@ class TuningSettings:
                              "sigma0") from None
         object.__setattr__(self, "friction_spread", MappingProxyType(spread))
         object.__setattr__(self, "friction_samples", samples)
+        variation = {}
+        for key, value in dict(self.friction_variation).items():
+            if key not in SPREAD_PARAMETERS:
+                raise ValueError(f"TuningSettings.friction_variation has {key!r}; give "
+                                 f"{', '.join(SPREAD_PARAMETERS)}")
+            variation[key] = positive("TuningSettings", f"friction_variation[{key!r}]", value,
+                                      SPREAD_PARAMETERS[key])
+        object.__setattr__(self, "friction_variation", MappingProxyType(variation))
 
 
 @dataclass(frozen=True, eq=False)
@@ -668,7 +683,8 @@ def _bool(table, key, file, section, default):
 
 def _friction(data, structure, folder, file) -> GuideWayFriction | None:
     laws = friction_law_names()
-    table = _table(data, "friction", file, ("pads",), ("viscous", "measurements", *laws))
+    table = _table(data, "friction", file, ("pads",), ("viscous", "measurements", "variation",
+                                                       *laws))
     if table is None:
         return None
     pads = table["pads"]
@@ -953,7 +969,7 @@ def _torque_speed(motor, file, speed_max_rpm) -> TorqueSpeedCurve | None:
 
 
 _SAMPLING_KEYS = ("current_period", "velocity_period", "position_period", "computation_delay",
-                  "speed_filter", "continuous")
+                  "speed_filter", "integral_rule", "continuous")
 
 
 def _sampling(table, file, defaults) -> Sampling:
@@ -961,9 +977,10 @@ def _sampling(table, file, defaults) -> Sampling:
 
     Sample periods must be > 0 (a continuous drive is ``continuous = true``, not a zero
     period): current and velocity periods in [1e-6, 0.01] s, the position period in
-    [1e-6, 0.1] s; ``computation_delay`` 0 or in [0.1, 10] sample periods (a value below 0.1
-    is a delay given in seconds); ``speed_filter`` in [0, 0.05] s (0: none; drives smooth the
-    measured speed over at most tens of ms).
+    [1e-6, 0.1] s, each a whole multiple of the next faster one (velocity of current, position
+    of velocity); ``computation_delay`` a whole number of sample periods in [0, 10];
+    ``speed_filter`` in [0, 0.05] s (0: none; drives smooth the measured speed over at most
+    tens of ms); ``integral_rule`` ``"forward_euler"`` or ``"tustin"``.
     """
     section = "drive.sampling"
     sampling = table.get("sampling")
@@ -998,15 +1015,26 @@ def _sampling(table, file, defaults) -> Sampling:
     if "computation_delay" in sampling:
         delay = _number(sampling, "computation_delay", file, section, positive=False,
                         low=0.0, high=10.0, unit="sample periods")
-        if 0.0 < delay < 0.1:
-            raise _err(file, f"[{section}] computation_delay", f"got {delay!r}",
-                       "it counts sample periods, not seconds: give 0 or a value in [0.1, 10] "
-                       "(typically 0.5 to 2)")
-        kwargs["computation_delay"] = delay
+        if delay != round(delay):
+            raise _err(file, f"[{section}] computation_delay", f"got {delay!r}; it counts "
+                       "sample periods, not seconds",
+                       "give the whole number of periods from sampling to applying the output "
+                       "(the output is applied at a sample instant): 0, 1 (the usual) or 2")
+        kwargs["computation_delay"] = round(delay)
     if "speed_filter" in sampling:
         kwargs["speed_filter"] = _number(sampling, "speed_filter", file, section,
                                          positive=False, low=0.0, high=0.05, unit="s")
-    return Sampling(**kwargs)
+    if "integral_rule" in sampling:
+        rule = sampling["integral_rule"]
+        if rule not in ("forward_euler", "tustin"):
+            raise _err(file, f"[{section}] integral_rule", f"got {rule!r}",
+                       'give "forward_euler" (the default) or "tustin"')
+        kwargs["integral_rule"] = rule
+    try:
+        return Sampling(**kwargs)
+    except ValueError as exc:
+        raise _err(file, f"[{section}]", str(exc).removeprefix("Sampling."),
+                   "fix the periods in [drive.sampling]") from None
 
 
 def _cutting(data, file) -> Cutting | None:
@@ -1186,6 +1214,65 @@ def _tuning(data, file) -> TuningSettings:
                           MappingProxyType({k: float(v) for k, v in spread.items()}))
 
 
+def _friction_variation(data, friction, tuning, file, defaults) -> dict:
+    """``[friction] variation``: the identified friction's own variation, +- values in SI units
+    (default: a named set's measured one); states in ``defaults`` which spread the nonlinear
+    verdict checks when ``[tuning] friction_spread`` does not say."""
+    table = data.get("friction") or {}
+    given = table.get("variation")
+    lugre = None if friction is None else friction.lugre
+    if given is not None:
+        if not isinstance(given, dict) or not given:
+            raise _err(file, "[friction] variation", f"got {given!r}",
+                       "give a table of +- values in SI units, e.g. { fs = 258.0, sigma0 = "
+                       "1.17e9, sigma1 = 1.3e6 }")
+        if lugre is None:
+            raise _err(file, "[friction] variation", "given without LuGre friction",
+                       "the variation is of LuGre parameters: use [friction.lugre] or remove it")
+        for key, value in given.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise _err(file, f"[friction] variation.{key}", f"got {value!r}",
+                           "give a number in SI units")
+        variation = {k: float(v) for k, v in given.items()}
+        source = "[tuning] friction_spread absent: the identified variation of [friction]"
+    elif lugre is not None and _named_set(table) == "bianchi2014":
+        from .friction.lugre import BIANCHI2014_SPREAD
+
+        variation = dict(BIANCHI2014_SPREAD)
+        source = ("[tuning] friction_spread and [friction] variation absent: the variation "
+                  "measured over the paper's six tests of the named set bianchi2014")
+    else:
+        variation, source = {}, ""
+    try:
+        if lugre is not None and variation:
+            FrictionSpread.absolute(lugre, variation)   # names, and the low corner > 0
+        box = friction_spread(lugre, dict(tuning.friction_spread), variation)
+    except ValueError as exc:
+        raise _err(file, "[friction] variation", str(exc), "fix the variation") from None
+    if lugre is None:
+        return variation
+    if tuning.friction_spread:
+        pass  # the spread is given: nothing defaulted
+    elif box is not None:
+        defaults.append(f"{source}, {box.describe()}: the nonlinear verdict checks its "
+                        f"{len(box.corners())} corners")
+    else:
+        defaults.append("[friction] variation and [tuning] friction_spread absent: the nonlinear "
+                        "verdict checks the nominal friction only (state the identified set's "
+                        "variation as [friction] variation = { fs = ..., sigma0 = ..., sigma1 = "
+                        "... }, +- values in SI units)")
+    return variation
+
+
+def _named_set(table) -> str | None:
+    """The name of the named LuGre set of a LuGre ``[friction]`` (``lugre = "bianchi2014"``,
+    the default), if any; None when the parameters are given or fitted to measurements."""
+    if "measurements" in table:
+        return None
+    value = table.get("lugre", "bianchi2014")
+    return value.lower() if isinstance(value, str) else None
+
+
 _REQUIREMENT_RANGES = {"ms_velocity_max": (1.0, 100.0, ""), "ms_position_max": (1.0, 100.0, ""),
                        "phase_margin_min_deg": (0.0, 90.0, "deg"),
                        "gain_margin_min_db": (0.0, 60.0, "dB"), "kv_min": (0.0, 1e4, "1/s"),
@@ -1334,7 +1421,12 @@ def axis_from_tables(data: dict, file) -> Axis:
         defaults.append("[drive.motor] has no torque_peak and torque_continuous: the thrust "
                         "budget is not checked")
     operation = _operation(data, drive, friction, cutting, requirements, file, defaults)
+    tuning = _tuning(data, file)
+    variation = _friction_variation(data, friction, tuning, file,
+                                    defaults if drive is not None else [])
+    if variation:
+        tuning = dataclasses.replace(tuning, friction_variation=MappingProxyType(variation))
     return Axis(name=name, description=str(data["axis"].get("description", "")),
                 path=folder.resolve(), structure=structure, friction=friction, drive=drive,
                 cutting=cutting, operation=operation, requirements=requirements,
-                tuning=_tuning(data, file), tables=_frozen(data), defaults=tuple(defaults))
+                tuning=tuning, tables=_frozen(data), defaults=tuple(defaults))

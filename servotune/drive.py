@@ -208,6 +208,16 @@ class TorqueSpeedCurve:
     def peak(self, omega: float) -> float:
         """Return the peak torque [N m] at a motor speed [rad/s].
 
+        Parameters
+        ----------
+        omega : float
+            Motor speed [rad/s], >= 0.
+
+        Returns
+        -------
+        float
+            The peak torque [N m].
+
         Raises
         ------
         ValueError
@@ -217,6 +227,16 @@ class TorqueSpeedCurve:
 
     def continuous(self, omega: float) -> float:
         """Return the continuous torque [N m] at a motor speed [rad/s].
+
+        Parameters
+        ----------
+        omega : float
+            Motor speed [rad/s], >= 0.
+
+        Returns
+        -------
+        float
+            The continuous torque [N m].
 
         Raises
         ------
@@ -349,6 +369,16 @@ class DriveLimits:
     def peak(self, omega: float) -> float:
         """Return the peak torque [N m] at a motor speed [rad/s] (see the class docstring).
 
+        Parameters
+        ----------
+        omega : float
+            Motor speed [rad/s], >= 0.
+
+        Returns
+        -------
+        float
+            The peak torque [N m].
+
         Raises
         ------
         ValueError
@@ -359,6 +389,16 @@ class DriveLimits:
     def continuous(self, omega: float) -> float:
         """Return the continuous torque [N m] at a motor speed [rad/s] (see the class
         docstring).
+
+        Parameters
+        ----------
+        omega : float
+            Motor speed [rad/s], >= 0.
+
+        Returns
+        -------
+        float
+            The continuous torque [N m].
 
         Raises
         ------

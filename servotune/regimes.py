@@ -57,6 +57,7 @@ __all__ = [
     "Operation",
     "RegimeModel",
     "friction_samples",
+    "friction_spread",
     "regime_models",
     "stribeck_slope",
 ]
@@ -465,3 +466,253 @@ def regime_models(friction: LuGreParameters | None, operation: Operation | None,
             models.append(RegimeModel(f"feeding {v * 1e3:.3g} mm/s", "sliding", params, speed=v,
                                       sample=label))
     return tuple(models)
+
+
+def _short(value: float) -> str:
+    """A number in 3 significant digits without a ``+`` or leading zeros in its exponent."""
+    text = f"{value:.3g}"
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}e{int(exponent)}"
+    return text
+
+
+@dataclass(frozen=True)
+class FrictionSpread:
+    """A box of LuGre parameters around the nominal friction: the friction a design must hold.
+
+    Each spread parameter lies between a low and a high value, the others stay nominal; the
+    corners of the box are every combination of the lows and highs (2^n for n parameters).
+    A spread is given in one of three forms per parameter: ``"fraction"`` (+- a fraction of
+    the nominal value, as ``[tuning] friction_spread`` gives fc, fs, sigma1), ``"factor"``
+    (x/÷ a factor, as it gives sigma0) or ``"absolute"`` (+- a value in SI units, as an
+    identification reports its variation: ``[friction] variation``).
+
+    Parameters
+    ----------
+    nominal : LuGreParameters
+        The nominal friction (axis totals).
+    deviations : Mapping
+        Parameter name (:data:`SPREAD_PARAMETERS`) -> ``(form, value)``: ``("fraction", f)``
+        with f in (0, 1), ``("factor", k)`` with k > 1, ``("absolute", d)`` with
+        0 < d < the nominal value [SI].
+    source : str
+        Where the spread comes from (shown with the results), e.g. ``"[friction] variation"``.
+
+    Raises
+    ------
+    ValueError
+        An unknown parameter or form, a value outside its range, or no parameter.
+
+    Examples
+    --------
+    The paper's measured variation of its identified set spans a box of 8 corners:
+
+    >>> from servotune.friction.lugre import BIANCHI2014
+    >>> box = FrictionSpread.absolute(BIANCHI2014, {"fs": 258.0, "sigma0": 1.17e9})
+    >>> box.describe(), len(box.corners())
+    ('fs +-258 N, sigma0 +-1.17e9 N/m', 4)
+    >>> box.corners()[0][0]
+    'fs -258 N, sigma0 -1.17e9 N/m'
+    """
+
+    nominal: LuGreParameters
+    deviations: Mapping
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.nominal, LuGreParameters):
+            raise ValueError(f"FrictionSpread.nominal must be LuGreParameters, got "
+                             f"{self.nominal!r}")
+        out = {}
+        for name, pair in dict(self.deviations).items():
+            if name not in SPREAD_PARAMETERS:
+                raise ValueError(f"friction spread of {name!r}: choose among "
+                                 f"{', '.join(SPREAD_PARAMETERS)}")
+            form, value = pair
+            value = float(value)
+            base = float(getattr(self.nominal, name))
+            if form == "fraction":
+                ok, why = 0.0 < value < 1.0, "a fraction in (0, 1)"
+            elif form == "factor":
+                ok, why = value > 1.0 and math.isfinite(value), "a factor > 1"
+            elif form == "absolute":
+                ok = 0.0 < value < base
+                why = (f"a value > 0 and below the nominal {_short(base)} "
+                       f"{SPREAD_PARAMETERS[name]} (the low corner must stay positive)")
+            else:
+                raise ValueError(f"friction spread of {name}: form {form!r} is not one of "
+                                 "fraction, factor, absolute")
+            if not ok:
+                raise ValueError(f"friction spread of {name} ({form}) is {why}, got {value!r}")
+            out[name] = (form, value)
+        if not out:
+            raise ValueError("a friction spread needs at least one parameter")
+        object.__setattr__(self, "deviations", MappingProxyType(out))
+
+    @classmethod
+    def relative(cls, nominal: LuGreParameters, spread: Mapping,
+                 source: str = "[tuning] friction_spread") -> FrictionSpread:
+        """Return the spread of ``[tuning] friction_spread``: fractions, a factor for sigma0.
+
+        Parameters
+        ----------
+        nominal : LuGreParameters
+            The nominal friction.
+        spread : Mapping
+            ``fc``, ``fs``, ``sigma1``: +- fraction in (0, 1); ``sigma0``: a factor > 1 (as
+            :func:`friction_samples`).
+        source : str
+            Where it comes from.
+
+        Returns
+        -------
+        FrictionSpread
+            The box.
+        """
+        return cls(nominal, {k: ("factor" if k == "sigma0" else "fraction", float(v))
+                             for k, v in dict(spread).items()}, source)
+
+    @classmethod
+    def absolute(cls, nominal: LuGreParameters, variation: Mapping,
+                 source: str = "[friction] variation") -> FrictionSpread:
+        """Return the spread of an identified variation: +- values in SI units.
+
+        Parameters
+        ----------
+        nominal : LuGreParameters
+            The nominal (identified) friction.
+        variation : Mapping
+            Parameter name -> +- value [N, N/m, N s/m], e.g.
+            :data:`servotune.friction.lugre.BIANCHI2014_SPREAD`.
+        source : str
+            Where it comes from.
+
+        Returns
+        -------
+        FrictionSpread
+            The box.
+        """
+        return cls(nominal, {k: ("absolute", float(v)) for k, v in dict(variation).items()},
+                   source)
+
+    def bounds(self, name: str) -> tuple[float, float]:
+        """Return the low and high value [SI] of a spread parameter.
+
+        Parameters
+        ----------
+        name : str
+            A parameter of the spread.
+
+        Returns
+        -------
+        (float, float)
+            ``(low, high)``.
+        """
+        form, value = self.deviations[name]
+        base = float(getattr(self.nominal, name))
+        if form == "fraction":
+            return base * (1.0 - value), base * (1.0 + value)
+        if form == "factor":
+            return base / value, base * value
+        return base - value, base + value
+
+    def _labels(self, name: str) -> tuple[str, str, str]:
+        """(low label, high label, range text) of a parameter."""
+        form, value = self.deviations[name]
+        unit = SPREAD_PARAMETERS[name]
+        if form == "fraction":
+            return (f"{name} -{value:.0%}", f"{name} +{value:.0%}", f"{name} +-{value:.0%}")
+        if form == "factor":
+            return (f"{name} / {value:g}", f"{name} x {value:g}", f"{name} / {value:g} to "
+                                                                  f"x {value:g}")
+        return (f"{name} -{_short(value)} {unit}", f"{name} +{_short(value)} {unit}",
+                f"{name} +-{_short(value)} {unit}")
+
+    def describe(self) -> str:
+        """Return the spread in one line, e.g. ``"fs +-258 N, sigma0 +-1.17e9 N/m"``.
+
+        Returns
+        -------
+        str
+            The range of each parameter, in the order given.
+        """
+        return ", ".join(self._labels(name)[2] for name in self.deviations)
+
+    def corners(self) -> tuple[tuple[str, LuGreParameters], ...]:
+        """Return the corners of the box: every combination of the lows and highs.
+
+        A corner whose Fs falls below its Fc keeps Fs and lowers Fc to it when the spread
+        lowered Fs, else raises Fs to Fc (no Stribeck drop either way).
+
+        Returns
+        -------
+        tuple of (str, LuGreParameters)
+            ``(label, friction)`` per corner, 2^n of them, the label naming each parameter's
+            side (``"fs -258 N, sigma0 x 3"``); the first parameter varies slowest.
+        """
+        names = list(self.deviations)
+        out = []
+        for sides in itertools.product((0, 1), repeat=len(names)):
+            changes, labels = {}, []
+            for name, side in zip(names, sides, strict=True):
+                changes[name] = self.bounds(name)[side]
+                labels.append(self._labels(name)[side])
+            fc = changes.get("fc", self.nominal.fc)
+            fs = changes.get("fs", self.nominal.fs)
+            if fs < fc:
+                if "fs" in changes and changes["fs"] < self.nominal.fs:
+                    changes["fc"] = fs
+                else:
+                    changes["fs"] = fc
+            out.append((", ".join(labels), dataclasses.replace(self.nominal, **changes)))
+        return tuple(out)
+
+    def to_dict(self) -> dict:
+        """Return the spread as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``source``, ``text`` (:meth:`describe`), ``corners`` (their number) and
+            ``parameters``: per name its ``form``, ``value``, ``nominal``, ``low``, ``high``
+            (SI) and ``unit``.
+        """
+        params = {}
+        for name, (form, value) in self.deviations.items():
+            low, high = self.bounds(name)
+            params[name] = {"form": form, "value": value,
+                            "nominal": float(getattr(self.nominal, name)), "low": low,
+                            "high": high, "unit": SPREAD_PARAMETERS[name]}
+        return {"source": self.source, "text": self.describe(),
+                "corners": 2 ** len(self.deviations), "parameters": params}
+
+
+def friction_spread(nominal: LuGreParameters | None, spread: Mapping | None = None,
+                    variation: Mapping | None = None) -> FrictionSpread | None:
+    """Return the friction spread a design is verified over, or None.
+
+    ``spread`` (``[tuning] friction_spread``, the spread the tuning covers too) when given,
+    else ``variation`` (the identified set's own variation, ``[friction] variation``).
+
+    Parameters
+    ----------
+    nominal : LuGreParameters or None
+        The nominal friction (None: no spread).
+    spread : Mapping, optional
+        Fractions for fc, fs, sigma1 and a factor for sigma0 (:meth:`FrictionSpread.relative`).
+    variation : Mapping, optional
+        Absolute +- values [SI] (:meth:`FrictionSpread.absolute`).
+
+    Returns
+    -------
+    FrictionSpread or None
+        None when there is no LuGre friction or neither is given.
+    """
+    if nominal is None:
+        return None
+    if spread:
+        return FrictionSpread.relative(nominal, spread)
+    if variation:
+        return FrictionSpread.absolute(nominal, variation)
+    return None

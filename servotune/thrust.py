@@ -14,8 +14,8 @@ part), C the total viscous damping (the identified sigma2 or the design's C that
 the moving mass referred to the slide (slide, work piece, screw and motor inertia through the
 transmission), a the acceleration of rapid moves, v_r the rapid speed, F_cut the mean cutting
 force against the feed, and F_peak(v) = T_peak(v / r) / r, F_cont(v) = T_cont(v / r) / r the
-thrusts of the motor's torque-speed curve at the case's speed (:class:`servotune.drive.
-DriveLimits`: a data-sheet table, or the rated torques, flat up to the top speed or falling at
+thrusts of the motor's torque-speed curve at the case's speed
+(:class:`servotune.drive.DriveLimits`: a data-sheet table, or the rated torques, flat up to the top speed or falling at
 constant power above a rated speed). The acceleration is checked where it ends, at v_r, where
 C v_r is largest (and a falling curve lowest); the start of a move, where the static friction
 F_s instead of g(v_r) can need more at a small C, is not checked. The traverse at constant rapid
@@ -241,6 +241,16 @@ class ThrustBudget:
     def thrust_peak_at(self, v: float) -> float:
         """Return the peak thrust [N] at a slide speed [m/s]: T_peak(v / r) / r.
 
+        Parameters
+        ----------
+        v : float
+            Slide speed [m/s], >= 0.
+
+        Returns
+        -------
+        float
+            The peak thrust [N].
+
         Raises
         ------
         ValueError
@@ -252,6 +262,16 @@ class ThrustBudget:
 
     def thrust_continuous_at(self, v: float) -> float:
         """Return the continuous thrust [N] at a slide speed [m/s]: T_cont(v / r) / r.
+
+        Parameters
+        ----------
+        v : float
+            Slide speed [m/s], >= 0.
+
+        Returns
+        -------
+        float
+            The continuous thrust [N].
 
         Raises
         ------

@@ -41,13 +41,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .closed_loop import axis_compliance
+from .friction.lugre import LuGreParameters
+from .regimes import FrictionSpread, friction_spread
 from .simulate.contact import LuGreFriction
 from .simulate.result import SimulationError
 from .simulate.scenario import constant_speed, planned_sweep, sweep_plan
 from .simulate.simulator import NonlinearAxis, simulate
 from .units import HZ_PER_RAD_S
 
-__all__ = ["Simulation", "RegimeVerdict", "Verdict", "nonlinear_verdict", "sweep_band",
+__all__ = ["Simulation", "CornerVerdict", "RegimeVerdict", "Verdict", "nonlinear_verdict",
+           "verdict_spread", "sweep_band",
            "predicted_resonances", "simulate_sweep", "DEFAULT_PROCESS_FORCE", "HarmonicPeak",
            "harmonic_scan", "SCAN_LEVELS"]
 
@@ -74,6 +77,7 @@ class Simulation:
     force_pp: float
     speed: float
     band_hz: tuple[float, float]
+    friction: str = "nominal"   # or the corner of the friction spread
     peak: float | None = None               # [m/N]
     resonance_hz: float | None = None
     pad_amplitude: float | None = None      # [m] at the resonance
@@ -97,6 +101,7 @@ class Simulation:
             ``simulated_s``, ...).
         """
         return {"regime": self.regime, "design": self.design, "kind": self.kind,
+                "friction": self.friction,
                 "force_pp_n": self.force_pp, "speed_m_per_s": self.speed,
                 "band_hz": list(self.band_hz), "peak_m_per_n": self.peak,
                 "resonance_hz": self.resonance_hz, "pad_amplitude_m": self.pad_amplitude,
@@ -193,8 +198,84 @@ def _harmonic_or_why(nl_axis, speed, forces, band):
 
 
 @dataclass(frozen=True)
+class CornerVerdict:
+    """One corner of the friction spread in one regime: its linear claim, its periodic
+    responses by harmonic balance and, for the regime's worst corner, its time simulations.
+
+    Parameters
+    ----------
+    label : str
+        The corner (``"fs +258 N, sigma0 -1.17e9 N/m, sigma1 +1.3e6 N s/m"``).
+    friction : LuGreParameters
+        Its friction (axis totals; sigma2 as identified, the design's C replaces it).
+    claimed_peak : float or None
+        Its own linear claim: the worst compliance peak of the regime's models with this
+        friction [m/N] (inf: a model is unstable with the design).
+    harmonic : tuple of HarmonicPeak
+        The periodic responses at the regime's force levels.
+    harmonic_note : str
+        Why harmonic balance is missing, if it is.
+    simulations : tuple of Simulation
+        The time simulations of this corner (the regime's worst corner only).
+    holds : bool
+        Whether the regime's claim holds at this corner.
+    reason : str
+        ``"holds"`` or why not.
+    """
+
+    label: str
+    friction: LuGreParameters
+    claimed_peak: float | None
+    harmonic: tuple[HarmonicPeak, ...] = ()
+    harmonic_note: str = ""
+    simulations: tuple[Simulation, ...] = ()
+    holds: bool = True
+    reason: str = "holds"
+
+    @property
+    def harmonic_peak(self) -> HarmonicPeak | None:
+        """The largest periodic response over the force levels (None without any)."""
+        return max(self.harmonic, key=lambda h: h.peak) if self.harmonic else None
+
+    @property
+    def simulated_peak(self) -> float | None:
+        """The largest simulated sweep peak [m/N] (None when not simulated)."""
+        worst = _worst(self.simulations)
+        return None if worst is None else worst[0]
+
+    def to_dict(self) -> dict:
+        """Return the corner as JSON-ready data.
+
+        Returns
+        -------
+        dict
+            ``label``, ``friction`` (its LuGre parameters, SI), ``claimed_peak_m_per_n``,
+            ``harmonic_peak_m_per_n``, ``simulated_peak_m_per_n``, ``holds``, ``reason``, the
+            periodic responses and the simulations.
+        """
+        worst = self.harmonic_peak
+        return {"label": self.label, "friction": self.friction.to_dict(),
+                "claimed_peak_m_per_n": self.claimed_peak,
+                "harmonic_peak_m_per_n": None if worst is None else worst.peak,
+                "simulated_peak_m_per_n": self.simulated_peak, "holds": self.holds,
+                "reason": self.reason,
+                "harmonic_balance": [h.to_dict() for h in self.harmonic],
+                "harmonic_balance_note": self.harmonic_note,
+                "simulations": [s.to_dict() for s in self.simulations]}
+
+
+@dataclass(frozen=True)
 class RegimeVerdict:
-    """The claim of one regime against the nonlinear axis, before and after."""
+    """The claim of one regime against the nonlinear axis, before and after.
+
+    ``claimed_peak`` is the claim judged: the worst linear compliance peak over the regime's
+    models with the nominal friction and with every corner of the friction spread (the tuner's
+    own claim is ``claimed_peak_tuned``). ``nonlinear_peak_after`` is the worst simulated peak
+    over the nominal friction and the corners simulated; ``nonlinear_peak_after_nominal`` and
+    ``nonlinear_peak_before`` are of the nominal friction (the realised improvement compares
+    them). ``simulations`` and ``harmonic`` are of the nominal friction; ``corners`` holds the
+    spread's.
+    """
 
     name: str
     speed: float
@@ -210,20 +291,33 @@ class RegimeVerdict:
     simulations: tuple[Simulation, ...] = ()
     harmonic: tuple[HarmonicPeak, ...] = ()
     harmonic_note: str = ""
+    claimed_peak_tuned: float | None = None
+    nonlinear_peak_after_nominal: float | None = None
+    corners: tuple[CornerVerdict, ...] = ()
+
+    @property
+    def worst_corner(self) -> CornerVerdict | None:
+        """The corner whose periodic response peaks highest (None without a spread)."""
+        scanned = [c for c in self.corners if c.harmonic]
+        return max(scanned, key=lambda c: c.harmonic_peak.peak) if scanned else None
 
     @property
     def realised_improvement(self) -> float | None:
-        if self.nonlinear_peak_before is None or not self.nonlinear_peak_after:
+        after = (self.nonlinear_peak_after_nominal if self.nonlinear_peak_after_nominal
+                 is not None else self.nonlinear_peak_after)
+        if self.nonlinear_peak_before is None or not after:
             return None
-        return self.nonlinear_peak_before / self.nonlinear_peak_after
+        return self.nonlinear_peak_before / after
 
     @property
     def linear_improvement(self) -> float | None:
-        if self.claimed_peak_before is None or not self.claimed_peak:
+        claim = self.claimed_peak_tuned if self.claimed_peak_tuned is not None else \
+            self.claimed_peak
+        if self.claimed_peak_before is None or not claim:
             return None
         if not math.isfinite(self.claimed_peak_before):
             return None
-        return self.claimed_peak_before / self.claimed_peak
+        return self.claimed_peak_before / claim
 
     def to_dict(self) -> dict:
         """Return the regime's verdict as JSON-ready data.
@@ -232,26 +326,36 @@ class RegimeVerdict:
         -------
         dict
             The fields under names with their units, the realised (nonlinear before over
-            after) and linear (claim before over claim after) improvements, and the
-            simulations.
+            after, nominal friction) and linear (claim before over the tuner's claim after)
+            improvements, the simulations and the corners of the friction spread.
         """
+        worst = self.worst_corner
         return {"name": self.name, "speed_m_per_s": self.speed, "models": list(self.models),
                 "claimed_peak_m_per_n": self.claimed_peak,
+                "claimed_peak_tuned_m_per_n": self.claimed_peak_tuned,
                 "claimed_peak_before_m_per_n": self.claimed_peak_before,
                 "nonlinear_peak_before_m_per_n": self.nonlinear_peak_before,
                 "nonlinear_peak_after_m_per_n": self.nonlinear_peak_after,
+                "nonlinear_peak_after_nominal_m_per_n": self.nonlinear_peak_after_nominal,
                 "realised_improvement": self.realised_improvement,
                 "linear_improvement": self.linear_improvement,
                 "band_hz": list(self.band_hz), "holds": self.holds, "reason": self.reason,
                 "explanation": self.explanation,
                 "simulations": [s.to_dict() for s in self.simulations],
                 "harmonic_balance": [h.to_dict() for h in self.harmonic],
-                "harmonic_balance_note": self.harmonic_note}
+                "harmonic_balance_note": self.harmonic_note,
+                "worst_corner": None if worst is None else worst.label,
+                "corners": [c.to_dict() for c in self.corners]}
 
 
 @dataclass(frozen=True)
 class Verdict:
-    """Whether a design is verified, and what the verification covered."""
+    """Whether a design is verified, and what the verification covered.
+
+    ``coverage`` says what the nonlinear checks ran over (the friction spread, the forces,
+    the feeds, the duty of the thrust budget; see :func:`nonlinear_verdict`) and
+    ``coverage_text`` says it in one line; :attr:`headline` is the verdict line.
+    """
 
     verified: bool
     linear_holds: bool
@@ -261,10 +365,30 @@ class Verdict:
     reasons: tuple[str, ...]
     checked: tuple[str, ...] = ()
     not_checked: tuple[str, ...] = field(default=())
+    coverage: dict = field(default_factory=dict)
+    coverage_text: str = ""
 
     @property
     def label(self) -> str:
         return "VERIFIED" if self.verified else "NOT VERIFIED"
+
+    @property
+    def headline(self) -> str:
+        """The verdict line: the label, what holds or why not, and what it covers.
+
+        Returns
+        -------
+        str
+            ``"VERIFIED over ...: ..."`` or ``"NOT VERIFIED: <reasons> (checked over ...)"``.
+        """
+        over = f" {self.coverage_text}" if self.coverage_text else ""
+        if self.verified:
+            what = ("the linear checks hold in every regime model and the nonlinear axis holds "
+                    "the claim in every regime" if self.nonlinear_holds is not None
+                    else (self.checked[0] if self.checked else "the linear checks hold"))
+            return f"VERIFIED{over}: {what}"
+        reasons = "; ".join(self.reasons) if self.reasons else "see the checks"
+        return f"NOT VERIFIED: {reasons}" + (f" (checked{over})" if over else "")
 
     def to_dict(self) -> dict:
         """Return the verdict as JSON-ready data.
@@ -272,13 +396,15 @@ class Verdict:
         Returns
         -------
         dict
-            ``verified``, ``label``, what held, the tolerance, the reasons, what was checked
-            and what not, and each regime's verdict.
+            ``verified``, ``label``, ``headline``, what held, the tolerance, the reasons,
+            what was checked and what not, the ``coverage`` and ``coverage_text``, and each
+            regime's verdict.
         """
-        return {"verified": self.verified, "label": self.label,
+        return {"verified": self.verified, "label": self.label, "headline": self.headline,
                 "linear_holds": self.linear_holds, "nonlinear_holds": self.nonlinear_holds,
                 "tolerance": self.tolerance, "reasons": list(self.reasons),
                 "checked": list(self.checked), "not_checked": list(self.not_checked),
+                "coverage": self.coverage, "coverage_text": self.coverage_text,
                 "regimes": [r.to_dict() for r in self.regimes]}
 
 
@@ -487,11 +613,14 @@ def simulate_feeding(axis: NonlinearAxis, speed: float, tags: dict,
                       wall_time=time.perf_counter() - wall)
 
 
-def design_axis(axis, problem, design) -> NonlinearAxis:
-    """The nonlinear axis of a design: LuGre pads with sigma2 = C, the design's drive with full
-    velocity feed-forward (the axis follows its feed without lag)."""
+def design_axis(axis, problem, design, friction: LuGreParameters | None = None
+                ) -> NonlinearAxis:
+    """The nonlinear axis of a design: LuGre pads (the axis' friction, or ``friction``) with
+    sigma2 = C, the design's drive with full velocity feed-forward (the axis follows its feed
+    without lag)."""
     drive = dataclasses.replace(problem.drive_for(design), velocity_feedforward=1.0)
-    lugre = dataclasses.replace(axis.friction.lugre, sigma2=float(design.c))
+    lugre = dataclasses.replace(axis.friction.lugre if friction is None else friction,
+                                sigma2=float(design.c))
     return NonlinearAxis(axis.structure, drive, axis.pads, LuGreFriction(lugre))
 
 
@@ -540,8 +669,169 @@ def _explain(regime, kind, improvement, active) -> str:
               "relaxes the thrust budget) or a faster velocity loop (shorter sample times)")
 
 
+# ------------------------------------------------------------------------ friction spread
+def verdict_spread(axis) -> FrictionSpread | None:
+    """Return the friction spread the verdict checks an axis over, or None.
+
+    ``[tuning] friction_spread`` when given (the spread the tuning covers too), else the
+    identified set's own variation (``[friction] variation``, or a named set's measured one);
+    see :func:`servotune.regimes.friction_spread`.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+
+    Returns
+    -------
+    FrictionSpread or None
+        None without LuGre friction or without either.
+    """
+    if axis.friction is None:
+        return None
+    t = axis.tuning
+    return friction_spread(axis.friction.lugre, dict(t.friction_spread),
+                           dict(t.friction_variation))
+
+
+def _receptance_compliance(receptance, model, c, omega) -> np.ndarray:
+    """|x_wp / F| with the model's linear pad contact (total impedance Z_0 + jwC shared by the
+    pads) closed over the closed-loop receptance with the pads free:
+    ``x_p = (I + G_pp z)^-1 G_pF F``, ``x_wp = G_wF F - G_wp z x_p`` (as the linear start of
+    harmonic balance, :func:`servotune.harmonic.compliance.presliding_guess`)."""
+    g = receptance(omega)
+    n = g.shape[0] - 1
+    z = (model.impedance(omega) + 1j * omega * c) / n
+    a = np.eye(n) + np.moveaxis(g[:n, :n], -1, 0) * z[:, None, None]
+    x = np.linalg.solve(a, np.moveaxis(g[:n, n], -1, 0)[..., None])[..., 0]
+    return np.abs(g[n, n] - z * np.einsum("jk,kj->k", g[n, :n], x))
+
+
+def _corner_claim(problem, drive, receptance, models, c, omega):
+    """The worst compliance peak of a regime's models with one friction, their predicted
+    resonances, and why not (a model unstable with the design)."""
+    from .closed_loop import closed_loop
+    from .frequency import peak
+    from .plant import UnstableLoopError
+
+    worst, resonances = 0.0, []
+    for model in models:
+        loop = closed_loop(problem.structure, drive, model.contact(c), problem.pads)
+        try:
+            loop.require_stable(what=f"closed loop ({model.name})")
+        except UnstableLoopError as exc:
+            return math.inf, [], str(exc).splitlines()[0]
+        if receptance is not None:
+            h = _receptance_compliance(receptance, model, c, omega)
+        else:
+            h = np.abs(loop.compliance(omega, problem.force, [problem.force])[0])
+        worst = max(worst, peak(omega, h)[0])
+        resonances += predicted_resonances(omega, h)
+    return worst, resonances, ""
+
+
+def _run_checks(sims, band, speed, claim, tol) -> list[str]:
+    """What the runs of one friction find wrong: errors, growth, band edges, stick-slip, and a
+    peak above the claim beyond the tolerance."""
+    why = []
+    for s in sims:
+        what = f"{s.kind} at {s.force_pp:g} N p-p" if s.kind == "sweep" else "feeding"
+        if s.error:
+            why.append(f"{what}: {s.error}")
+        if s.kind == "sweep" and s.decays is False:
+            why.append(f"{what}: the oscillation does not decay after the force stops")
+        if s.at_edge:
+            why.append(f"{what}: the peak at {s.resonance_hz:.1f} Hz lies at the edge of the "
+                       f"swept band {s.band_hz[0]:.3g}-{s.band_hz[1]:.3g} Hz")
+        if s.stick_slip:
+            ripple = "" if s.speed_ripple is None else f" (speed ripple {s.speed_ripple:.0%})"
+            why.append(f"stick-slip while feeding at {speed * 1e3:.3g} mm/s{ripple}")
+    worst = _worst(sims)
+    if claim is not None and math.isfinite(claim) and worst is not None:
+        if worst[0] > claim * (1 + tol):
+            s = worst[1]
+            why.append(f"the nonlinear axis peaks at {s.peak:.3g} m/N ({s.resonance_hz:.1f} "
+                       f"Hz, {s.force_pp:.4g} N p-p), {s.peak / claim - 1:.0%} above the "
+                       f"claim {claim:.3g} m/N (tolerance {tol:.0%})")
+    return why
+
+
+def _corner_jobs(row, name, speed, levels, band, nominal_res, torque_limit) -> list:
+    """The time simulations of a corner: its worst periodic response swept again in time
+    around its peak ([f/1.25, 1.25 f]) and, feeding, a run at the feed speed; without harmonic
+    balance, a sweep at every level over the regime's band."""
+    tags = {"regime": name, "design": "after", "friction": row["label"]}
+    jobs = []
+    if row["scan"]:
+        worst = max(row["scan"], key=lambda h: h.peak)
+        f = worst.resonance_hz
+        narrow = sweep_band((f, f), [f])
+        res = [r for r in row["resonances"] if narrow[0] <= r[0] <= narrow[1]] or [(f, 0.02)]
+        jobs.append((simulate_sweep, (row["axis"], float(worst.force_pp), narrow, res, speed,
+                                      torque_limit, tags)))
+    else:
+        for force in levels:
+            jobs.append((simulate_sweep, (row["axis"], float(force), band,
+                                          row["resonances"] + nominal_res, speed,
+                                          torque_limit, tags)))
+    if speed > 0:
+        jobs.append((simulate_feeding, (row["axis"], speed, tags)))
+    return jobs
+
+
+def _spread_thrust(problem, box, design) -> list[str]:
+    """The thrust budget's cases at each corner of the spread that do not fit."""
+    if problem.thrust is None or box is None:
+        return []
+    out = []
+    for label, params in box.corners():
+        budget = dataclasses.replace(problem.thrust, friction=params)
+        for case in budget.cases(design.c):
+            if not case.fits:
+                out.append(f"thrust budget, {label}: {case.name} needs {case.needed / 1e3:.3g} "
+                           f"kN of {case.usable / 1e3:.3g} kN usable")
+    return out
+
+
+def _coverage(box, regimes_judged, process, levels_of, corner_levels_of, band_of, problem,
+              simulated, default_process) -> tuple[dict, str]:
+    """What the nonlinear checks ran over, as data and in one line."""
+    speeds = sorted(v for _, v in regimes_judged if v > 0)
+    standing = any(v == 0 for _, v in regimes_judged)
+    forces = sorted({f for fs in levels_of.values() for f in fs})
+    corner_forces = sorted({f for fs in corner_levels_of.values() for f in fs})
+    multiples = [min(forces) / process, max(forces) / process] if forces else []
+    duty = ([c.name for c in problem.thrust.cases(0.0)] if problem.thrust is not None else [])
+    coverage = {
+        "friction_spread": None if box is None else box.to_dict(),
+        "regimes": [name for name, _ in regimes_judged],
+        "process_force_pp_n": process, "process_force_defaulted": default_process,
+        "forces_pp_n": forces, "corner_forces_pp_n": corner_forces,
+        "force_multiples_of_process": multiples,
+        "feeds_m_per_s": speeds, "standing": standing,
+        "band_hz": {name: list(b) for name, b in band_of.items()},
+        "duty": duty, "simulated": simulated}
+    if box is None:
+        text = "at the nominal friction only (no friction spread given)"
+    else:
+        n = len(box.corners())
+        text = f"over the friction spread ({n} corners: {box.describe()})"
+    if multiples:
+        lo, hi = multiples
+        text += (f", forces {lo:.3g}-{hi:.3g} x the process force ({process:.4g} N p-p)"
+                 if hi > lo else f", forces {lo:.3g} x the process force ({process:.4g} N p-p)")
+    feeds = " and ".join(f"{v * 1e3:.3g}" for v in speeds)
+    if speeds:
+        text += f", feeds {feeds} mm/s" + (" and standing" if standing else "")
+    elif standing:
+        text += ", standing"
+    return coverage, text
+
+
+# --------------------------------------------------------------------------------- verdict
 def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
-                      speeds=None, simulate_before: bool = True, progress=None) -> Verdict:
+                      speeds=None, simulate_before: bool = True, progress=None,
+                      spread="axis") -> Verdict:
     """Return the verdict on a tuning result (see the module docstring).
 
     Parameters
@@ -566,25 +856,44 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         models are stable.
     progress : callable, optional
         ``progress(done, total)`` after each simulation.
+    spread : FrictionSpread, None or "axis"
+        The friction spread to check over: ``"axis"`` (default) the axis' own
+        (:func:`verdict_spread`), None the nominal friction only.
 
     Returns
     -------
     Verdict
-        ``verified`` when the linear check holds (``result.success``) and every regime holds
-        on the nonlinear axis.
+        ``verified`` when the linear check holds (``result.success``, and the thrust budget
+        at every corner of the spread) and every regime holds on the nonlinear axis at the
+        nominal friction and at every corner.
 
     Raises
     ------
     ValueError
         If a speed of ``speeds`` has no feeding regime model in ``result``.
+
+    Notes
+    -----
+    Over a friction spread (:class:`servotune.regimes.FrictionSpread`), a regime's claim is
+    the worst linear compliance peak of its models over the nominal friction (the tuner's
+    claim, with any friction samples it tuned for) and every corner of the box (each corner's
+    models closed over the closed-loop receptance, as harmonic balance uses it, after a
+    stability check of the closed loop). Every corner's periodic response is found by
+    harmonic balance at the regime's simulated force levels; the corner that peaks highest is
+    simulated in time (a sweep around its peak at its worst level, and a feeding run), as is
+    any corner harmonic balance cannot follow (at every level, over the regime's band). A
+    corner holds when its linear models are stable, its periodic responses and runs stay
+    within the tolerance of the regime's claim and its runs decay, stay off the band's edges,
+    keep the torque and do not stick and slip.
     """
+    from .harmonic.linear import pad_receptance
+
     problem = result.problem
     req = problem.requirements
-    linear_holds = bool(result.success)
     reasons = list(result.reasons)
     op = axis.operation
-    process = (op.process_force_pp if op is not None and op.process_force_pp
-               else DEFAULT_PROCESS_FORCE)
+    default_process = not (op is not None and op.process_force_pp)
+    process = DEFAULT_PROCESS_FORCE if default_process else op.process_force_pp
     speed_of = {m.regime: m.speed for m in problem.regimes}
     regimes = list(dict.fromkeys(m.regime for m in problem.regimes if m.cutting))
     for model, _ in result.excluded:
@@ -602,6 +911,8 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
                                  "regime has a linear claim")
             chosen += [name for name in match if name not in chosen]
         regimes = chosen
+    box = verdict_spread(axis) if isinstance(spread, str) else spread
+    corners = box.corners() if box is not None else ()
     before_ok = result.before.stable and simulate_before
     omega = 2 * math.pi * np.geomspace(0.5, 2500.0, 6000)
     modes = _wp_modes_hz(axis, np.array(req.band) * HZ_PER_RAD_S)
@@ -620,13 +931,15 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
             np.array(req.band) * HZ_PER_RAD_S, [f for f, _ in res], modes)
         levels = (forces if forces is not None else
                   [process * k for k in (FORCE_LEVELS if speed == 0 else FEEDING_LEVELS)])
+        levels = [float(f) for f in levels]
         # the periodic responses at and between the simulated levels (harmonic balance),
         # computed while the simulations run: they widen the check over the forces
-        scan_forces = sorted({float(f) for f in levels}
+        scan_forces = sorted(set(levels)
                              | ({process * k for k in SCAN_LEVELS} if forces is None else set()))
         scans.append((name, design_axis(axis, problem, result.design), speed, scan_forces,
                       band))
-        regime_info[name] = (speed, claim, claim_before, models, band)
+        regime_info[name] = (speed, claim, claim_before, models, band, res, levels,
+                             scan_forces)
         designs = [("after", result.design)] + ([("before", result.initial)] if before_ok
                                                 else [])
         for label, design in designs:
@@ -637,26 +950,85 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
                                               tags)))
             if speed > 0:
                 jobs.append((simulate_feeding, (nl_axis, speed, tags)))
+    spread_regimes = [name for name in regimes if corners and any(
+        m.regime == name and m.cutting and m.sample == "nominal" for m in problem.regimes)]
+    total = len(jobs) + sum(1 + (speed_of[name] > 0) for name in spread_regimes)
+    done = [0]
+
+    def tick():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], max(total, done[0]))
+
     futures = None if executor is None else [executor.submit(fn, *args) for fn, args in jobs]
     scanned = {name: _harmonic_or_why(nl, speed, f, band) for name, nl, speed, f, band in scans}
+    # the friction spread: every corner's linear claim and periodic responses; the worst
+    # corner of each regime simulated in time (submitted as soon as its regime is scanned)
+    rows_of, corner_jobs = {}, []
+    if spread_regimes:
+        nl_after = design_axis(axis, problem, result.design)
+        try:
+            receptance = pad_receptance(nl_after.structure, nl_after.drive, nl_after.pads,
+                                        problem.force)
+        except ValueError:
+            receptance = None   # coupled damping: the closed loop's own compliance
+        claim_omega = np.geomspace(req.band[0], req.band[1], 6001)
+    for name in spread_regimes:
+        speed, _, _, _, band, res, levels, _ = regime_info[name]
+        models = [m for m in problem.regimes
+                  if m.regime == name and m.cutting and m.sample == "nominal"]
+        rows = []
+        for label, params in corners:
+            corner_models = [dataclasses.replace(m, friction=params, sample=label)
+                             for m in models]
+            claim_c, res_c, unstable = _corner_claim(problem, nl_after.drive, receptance,
+                                                     corner_models, result.design.c,
+                                                     claim_omega)
+            nl_c = design_axis(axis, problem, result.design, friction=params)
+            scan, note = ((), "") if unstable else _harmonic_or_why(nl_c, speed, levels, band)
+            rows.append({"label": label, "friction": params, "claim": claim_c,
+                         "resonances": res_c, "unstable": unstable, "axis": nl_c,
+                         "scan": scan, "note": note})
+        stable = [r for r in rows if not r["unstable"]]
+        chosen = [r for r in stable if not r["scan"]]
+        scanned_rows = [r for r in stable if r["scan"]]
+        if scanned_rows:
+            chosen.append(max(scanned_rows, key=lambda r: max(h.peak for h in r["scan"])))
+        for row in chosen:
+            for fn, args in _corner_jobs(row, name, speed, levels, band, res, torque_limit):
+                corner_jobs.append((name, row["label"], fn, args,
+                                    None if executor is None else executor.submit(fn, *args)))
+        rows_of[name] = rows
+    total += len(corner_jobs) - sum(1 + (speed_of[name] > 0) for name in spread_regimes)
     if executor is None:
         sims = []
         for fn, args in jobs:
             sims.append(fn(*args))
-            if progress is not None:
-                progress(len(sims), len(jobs))
+            tick()
     else:
         sims = []
         for fut in futures:
             sims.append(fut.result())
-            if progress is not None:
-                progress(len(sims), len(jobs))
+            tick()
+    corner_sims = {}
+    for name, label, fn, args, fut in corner_jobs:
+        corner_sims.setdefault((name, label), []).append(fn(*args) if fut is None
+                                                         else fut.result())
+        tick()
     tol = req.nonlinear_tolerance
-    verdicts = []
+    spread_thrust = _spread_thrust(problem, box, result.design)
+    linear_holds = bool(result.success) and not spread_thrust
+    reasons += spread_thrust
+    verdicts, failures = [], []
     excluded = {m.regime: r for m, r in result.excluded}
     for name in regimes:
-        speed, claim, claim_before, models, band = regime_info[name]
+        speed, claim_tuned, claim_before, models, band, _, levels, _ = regime_info[name]
         scan, scan_note = scanned[name]
+        rows = rows_of.get(name, [])
+        claim = claim_tuned
+        if claim is not None and rows:
+            # an unstable corner fails on its own; the others are judged against the rest
+            claim = max([claim] + [r["claim"] for r in rows if not r["unstable"]])
         mine = tuple(s for s in sims if s.regime == name)
         after = [s for s in mine if s.design == "after"]
         before = [s for s in mine if s.design == "before"]
@@ -667,20 +1039,9 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
             why.append(f"left out of the tuning: {excluded[name]}")
         if claim is None and name not in excluded:
             why.append("no linear claim for this regime")
-        elif claim is not None and not math.isfinite(claim):
+        elif claim_tuned is not None and not math.isfinite(claim_tuned):
             why.append("the linear model of this regime is unstable with the design")
-        for s in after:
-            what = f"{s.kind} at {s.force_pp:g} N p-p" if s.kind == "sweep" else "feeding"
-            if s.error:
-                why.append(f"{what}: {s.error}")
-            if s.kind == "sweep" and s.decays is False:
-                why.append(f"{what}: the oscillation does not decay after the force stops")
-            if s.at_edge:
-                why.append(f"{what}: the peak at {s.resonance_hz:.1f} Hz lies at the edge of "
-                           f"the swept band {band[0]:.3g}-{band[1]:.3g} Hz")
-            if s.stick_slip:
-                ripple = "" if s.speed_ripple is None else f" (speed ripple {s.speed_ripple:.0%})"
-                why.append(f"stick-slip while feeding at {speed * 1e3:.3g} mm/s{ripple}")
+        why += _run_checks(after, band, speed, None, tol)
         if claim is not None and math.isfinite(claim) and scan:
             # the steady periodic response: a sweep passes a resonance before it has built up
             # and reads its peak low, so the scan judges every level, simulated or not
@@ -699,25 +1060,86 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
                 why.append(f"the nonlinear axis peaks at {s.peak:.3g} m/N ({s.resonance_hz:.1f} "
                            f"Hz, {s.force_pp:.4g} N p-p), {s.peak / claim - 1:.0%} above the "
                            f"claim {claim:.3g} m/N (tolerance {tol:.0%})")
-        holds = not why
+        failures += [f"{name}: {w}" for w in why]
+        corner_verdicts, corner_why = [], []
+        for row in rows:
+            runs = tuple(corner_sims.get((name, row["label"]), ()))
+            found = []
+            if row["unstable"]:
+                found.append(f"the linear model is unstable with the design ({row['unstable']})")
+            if row["scan"] and claim is not None and math.isfinite(claim):
+                h = max(row["scan"], key=lambda x: x.peak)
+                if h.peak > claim * (1 + tol):
+                    found.append(f"harmonic balance peak {h.peak:.3g} m/N ({h.resonance_hz:.1f} "
+                                 f"Hz, {h.force_pp:.4g} N p-p) is {h.peak / claim - 1:.0%} above "
+                                 f"the claim {claim:.3g} m/N")
+            found += _run_checks(runs, band, speed, claim, tol)
+            corner_why += [f"{row['label']}: {w}" for w in found]
+            failures += [f"{name}, {row['label']}: {w}" for w in found]
+            corner_verdicts.append(CornerVerdict(
+                row["label"], row["friction"], row["claim"], row["scan"], row["note"], runs,
+                not found, "; ".join(found) or "holds"))
+        all_why = why + corner_why
+        holds = not all_why
+        spread_after = [s for c in corner_verdicts for s in c.simulations]
+        worst_spread = _worst(after + spread_after)
         worst_after = None if nl_after is None else nl_after[0]
         worst_before = None if nl_before is None else nl_before[0]
         improvement = (None if worst_before is None or not worst_after
                        else worst_before / worst_after)
+        explanation = (_explain(name, "standing" if speed == 0 else "feeding", improvement,
+                                result.active) if holds else "")
+        if (claim is not None and claim_tuned is not None and math.isfinite(claim)
+                and claim > claim_tuned * (1 + 1e-6)):
+            top = max(rows, key=lambda r: r["claim"])
+            explanation = "; ".join(x for x in (
+                f"over the friction spread the claim is {claim:.3g} m/N (at {top['label']}), "
+                f"{claim / claim_tuned - 1:.0%} above the tuned {claim_tuned:.3g} m/N of the "
+                "tuning's friction models ([tuning] friction_spread tunes over the spread)",
+                explanation) if x)
         verdicts.append(RegimeVerdict(
             name=name, speed=speed, models=models, claimed_peak=claim,
             claimed_peak_before=claim_before, nonlinear_peak_before=worst_before,
-            nonlinear_peak_after=worst_after, band_hz=tuple(band), holds=holds,
-            reason="holds" if holds else "; ".join(why),
-            explanation=(_explain(name, "standing" if speed == 0 else "feeding", improvement,
-                                  result.active) if holds else ""),
-            simulations=mine, harmonic=scan, harmonic_note=scan_note))
+            nonlinear_peak_after=None if worst_spread is None else worst_spread[0],
+            band_hz=tuple(band), holds=holds,
+            reason="holds" if holds else "; ".join(all_why),
+            explanation=explanation, simulations=mine, harmonic=scan, harmonic_note=scan_note,
+            claimed_peak_tuned=claim_tuned, nonlinear_peak_after_nominal=worst_after,
+            corners=tuple(corner_verdicts)))
     nonlinear_holds = all(v.holds for v in verdicts)
-    reasons += [f"{v.name}: {v.reason}" for v in verdicts if not v.holds]
-    checked = (
-        "linear: stability, Ms of both loops, loop hierarchy, Ti vs velocity bandwidth, thrust "
-        "budget "
-        "and the compliance peak in every regime model, on dense grids with python-control",
+    reasons += failures
+    levels_of = {name: regime_info[name][7] for name in regimes}
+    corner_levels_of = {name: regime_info[name][6] for name in spread_regimes}
+    simulated = {v.name: {"nominal": sorted({s.force_pp for s in v.simulations
+                                            if s.kind == "sweep" and s.design == "after"}),
+                          "corners": {c.label: sorted({s.force_pp for s in c.simulations
+                                                       if s.kind == "sweep"})
+                                      for c in v.corners if c.simulations}}
+                 for v in verdicts}
+    coverage, coverage_text = _coverage(
+        box if spread_regimes else None, [(v.name, v.speed) for v in verdicts], process,
+        levels_of, corner_levels_of, {v.name: v.band_hz for v in verdicts}, problem, simulated,
+        default_process)
+    checked, not_checked = _checked_lines(problem, verdicts, box if spread_regimes else None,
+                                          result)
+    return Verdict(linear_holds and nonlinear_holds, linear_holds, nonlinear_holds,
+                   tuple(verdicts), tol, tuple(reasons), checked, not_checked, coverage,
+                   coverage_text)
+
+
+def _checked_lines(problem, verdicts, box, result) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """What the verdict checked and what not, each a line that is true of this run."""
+    thrust = problem.thrust
+    budget = ("the thrust budget on the motor's torque-speed curve ("
+              + ", ".join(f"{c.name}: {c.thrust_kind} thrust" for c in thrust.cases(0.0))
+              + ")" if thrust is not None else "")
+    samples = sorted({m.sample for m in problem.regimes if m.sample != "nominal"})
+    checked = [
+        "linear: stability, Ms of both loops, loop hierarchy, Ti vs velocity bandwidth"
+        + (f", {budget}" if budget else "")
+        + " and the compliance peak in every regime model (nominal friction"
+        + (f" and the tuning's friction samples {', '.join(samples)}" if samples else "")
+        + "), on dense grids with python-control",
         "nonlinear: LuGre friction at every pad, sine sweeps "
         + "; ".join(f"{v.name} over {v.band_hz[0]:.3g}-{v.band_hz[1]:.3g} Hz at "
                     + ", ".join(f"{f:.3g}" for f in sorted({s.force_pp for s in v.simulations
@@ -729,20 +1151,52 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         *(["nonlinear, between the simulated levels: the periodic response by harmonic "
            "balance (9 harmonics) at " + "; ".join(
                f"{v.name} " + ", ".join(f"{h.force_pp:.3g}" for h in v.harmonic) + " N p-p"
-               for v in verdicts if v.harmonic)] if any(v.harmonic for v in verdicts) else []))
-    not_checked = (
-        "the friction spread in the time simulation (only the nominal friction is simulated; "
-        "the spread enters the linear models)",
+               for v in verdicts if v.harmonic)] if any(v.harmonic for v in verdicts) else [])]
+    if box is not None:
+        n = len(box.corners())
+        worst = []
+        for v in verdicts:
+            c = v.worst_corner
+            if c is None:
+                continue
+            sim = c.simulated_peak
+            worst.append(f"{v.name} worst at {c.label}: {c.harmonic_peak.peak:.3g} m/N by "
+                         f"harmonic balance" + ("" if sim is None else
+                                                f", {sim:.3g} m/N simulated")
+                         + f" (claim {v.claimed_peak:.3g})")
+        checked.append(
+            f"the friction spread ({box.source}: {box.describe()}), at each of its {n} "
+            "corners: the stability and the compliance peak of every regime's linear models"
+            + (", the thrust budget" if thrust is not None else "")
+            + " and the periodic response by harmonic balance at the simulated levels; the "
+              "worst corner of each regime simulated in time (a sweep around its peak, and "
+              "feeding a stick-slip run)" + ("; " + "; ".join(worst) if worst else ""))
+    not_checked = []
+    if box is None:
+        not_checked.append("the friction spread: only the nominal friction is checked (give "
+                           "[tuning] friction_spread or the identified set's [friction] "
+                           "variation)")
+    else:
+        not_checked.append("inside the friction spread's box, only its corners (a response "
+                           "that peaks inside the box is missed); at the corners, Ms, the loop "
+                           "hierarchy and Ti (the linear checks cover the tuning's regime "
+                           "models)")
+    not_checked.append(
         "forces outside the levels simulated and scanned by harmonic balance, and operating "
         "points other than the regimes; the stability of the periodic responses found by "
-        "harmonic balance (the time simulation confirms the simulated levels)",
-        "the drive's torque-speed curve (only the peak torque is checked)")
-    return Verdict(linear_holds and nonlinear_holds, linear_holds, nonlinear_holds,
-                   tuple(verdicts), tol, tuple(reasons), checked, not_checked)
+        "harmonic balance (the time simulation confirms the simulated levels"
+        + (" and the worst corners)" if box is not None else ")"))
+    if thrust is not None:
+        not_checked.append(
+            "the start of a move against the static friction Fs (the budget takes the sliding "
+            "friction at the rapid speed) and the motor's heating over a duty cycle (each case "
+            "is judged alone); in the time simulation the motor torque only against its "
+            "largest peak torque, not the torque-speed curve at the simulated speed")
+    else:
+        not_checked.append("the thrust budget (the drive has no torque limits)")
+    return tuple(checked), tuple(not_checked)
 
 
 def _worst(sims):
     peaks = [(s.peak, s) for s in sims if s.kind == "sweep" and s.peak is not None]
     return max(peaks, key=lambda p: p[0]) if peaks else None
-
-

@@ -209,6 +209,16 @@ CASES = [
     ("axis-computation-delay-in-seconds", lambda t, s: ["modes", axis(t, s, sub(
         "computation_delay = 1.0", "computation_delay = 125.0e-6"))], 1,
      "computation_delay: got 0.000125; it counts sample periods, not seconds"),
+    ("axis-velocity-period-slower-than-position", lambda t, s: ["modes", axis(t, s, sub(
+        "velocity_period = 125.0e-6", "velocity_period = 4.0e-3"))], 1,
+     "position_period (0.001 s) is shorter than velocity_period (0.004 s): the position "
+     "controller runs inside the speed controller's cycle"),
+    ("axis-periods-not-multiples", lambda t, s: ["modes", axis(t, s, sub(
+        "position_period = 1.0e-3", "position_period = 1.1e-3"))], 1,
+     "is not a whole multiple of velocity_period"),
+    ("axis-computation-delay-fraction", lambda t, s: ["modes", axis(t, s, sub(
+        "computation_delay = 1.0", "computation_delay = 1.5"))], 1,
+     "give the whole number of periods"),
     ("axis-computation-delay-negative", lambda t, s: ["modes", axis(t, s, sub(
         "computation_delay = 1.0", "computation_delay = -1.0"))], 1, "computation_delay"),
     ("axis-speed-filter-huge", lambda t, s: ["modes", axis(t, s, sub(
