@@ -7,14 +7,23 @@ process amplitude; feeding at each feed speed: LuGre linearised about sliding), 
 digital drive as the sampled-data system it is, the thrust budget). The problem is the NLP of
 :mod:`servotune.tuning.nlp`::
 
-    minimise    max_m t_m + mean_weight mean_m t_m  +  tracking_weight Kv0/Kv
-                + c_cost_weight (C - C_lo)/C_span          (t_m = peak |h_m| / h0, cutting model m)
-    subject to  Ms of the velocity and of the position loop in every model (the Ms disk),
+    minimise    max_m t_m + mean_weight mean_m t_m + HELD_WEIGHT mean_k t_k
+                + tracking_weight Kv0/Kv + c_cost_weight (C - C_lo)/C_span
+                (t = peak |h| / h0; m the movable cutting models, k the held ones)
+    subject to  t_k <= cap_k / h0 for every held model k;
+                Ms of the velocity and of the position loop in every model (the Ms disk),
                 the loop hierarchy (velocity-loop bandwidth >= N x the position loop's), the
-                integral time (Ti x velocity bandwidth within [r_min, r_max]) and the current
+                integral time's lower bound (Ti x velocity bandwidth >= r_min) and the current
                 loop above the velocity loop, in every moving model, as the NLP's smooth gates;
                 the thrust budget (C v within the motor's usable thrust at each case); Kv >= Kv_min;
                 closed-loop stability in every model; bounds.
+
+The held models are those :func:`servotune.tuning.solve.held_models` finds at casadi's
+reference start (cutting models no free variable moves, e.g. the standing regime whose pads
+stick), with their caps, as ``tune`` sets them in the problem it returns; the scipy methods
+take them from there. The upper bound of Ti x bandwidth is not a row of the NLP (casadi's
+:mod:`servotune.tuning.requirements.integral_time` judges it on the design only), so it is
+not one here either: the common evaluator below checks it for every method.
 
 All methods work in the same log-scaled variables ``u = log(x / x0)`` within the same bounds.
 
@@ -101,7 +110,7 @@ from servotune.design import tuning_problem  # noqa: E402
 from servotune.drive import current_loop_bandwidth  # noqa: E402
 from servotune.tuning import Design, ResponseModel, requirement_checks, tune, verify  # noqa: E402
 from servotune.tuning import solve as tuning_solve  # noqa: E402
-from servotune.tuning.nlp import GATE_SHARPNESS, gate_parameters  # noqa: E402
+from servotune.tuning.nlp import GATE_SHARPNESS, HELD_WEIGHT, gate_parameters  # noqa: E402
 from servotune.tuning.ports import is_sampled  # noqa: E402
 from servotune.tuning.solve import model_stability  # noqa: E402
 
@@ -151,6 +160,11 @@ class GridObjective:
         self.in_loop = (w >= req.loop_band[0]) & (w <= req.loop_band[1])
         self.log_w_loop = np.log(w[self.in_loop])
         self.cut = list(problem.cutting_models)
+        # the lexicographic objective: held cutting models (capped, weighted last) and the
+        # movable ones (their worst peak and mean), as the NLP of the problem tune() returns
+        self.held = [self.cut.index(m) for m in problem.held if m in self.cut]
+        self.movable = [i for i in range(len(self.cut)) if i not in self.held]
+        self.caps = [problem.held_caps[list(problem.held).index(self.cut[i])] for i in self.held]
         self.x0 = problem.initial_design()
         self.free = problem.free
         self.lower = np.array([math.log(problem.bounds[v][0] / getattr(self.x0, v))
@@ -185,7 +199,10 @@ class GridObjective:
         f = 0.0
         if w_peak:
             t = np.asarray(peaks) / self.h0
-            f += w_peak * (float(t.max()) + p.mean_weight * float(t.mean()))
+            t_mov = t[self.movable]
+            f += w_peak * (float(t_mov.max()) + p.mean_weight * float(t_mov.mean()))
+            if self.held:
+                f += w_peak * HELD_WEIGHT * float(t[self.held].mean())
         if w_chatter:
             f += w_chatter * float(-min_re) / self.s0
         if "kv" in self.free and p.tracking_weight:
@@ -204,17 +221,13 @@ class GridObjective:
         gates = gate_parameters(p, gamma, self.current_bandwidth)
         lw, off, out = self.log_w_loop, 2.0, []
         for m in range(lv.shape[0]):
-            on_h, edge_h, on_lo, edge_lo, on_hi, edge_hi, on_i, edge_i = gates[m]
+            on_h, edge_h, on_lo, edge_lo, _, _, on_i, edge_i = gates[m]
             tv2 = np.abs(lv[m]) ** 2 / np.abs(1.0 + lv[m]) ** 2
             up, down = (tv2 - 0.5) / (tv2 + 0.5), (0.5 - tv2) / (0.5 + tv2)
             if req.bandwidth_ratio_min > 0:
                 out.append(up + _gate(lw - (edge_h + math.log(d.kv))) + off * (1 - on_h))
-            if req.ti_bandwidth_min > 0:
+            if req.ti_bandwidth_min > 0:   # (the upper bound is no row of the NLP)
                 out.append(up + _gate(lw - (edge_lo - math.log(d.ti))) + off * (1 - on_lo))
-            if req.ti_bandwidth_max > 0:
-                edge = edge_hi - math.log(d.ti)
-                out.append(down + _gate(edge - lw) + _gate(lw - edge - math.log(1.25))
-                           + off * (1 - on_hi))
             if req.current_bandwidth_ratio_min > 0:
                 out.append(down + _gate(edge_i - lw) + _gate(lw - edge_i - math.log(1.25))
                            + off * (1 - on_i))
@@ -229,11 +242,13 @@ class GridObjective:
         d = self.design(u)
         res = self.model(d, exact=False)
         h = res["compliance"][self.cut][:, self.in_band]
-        f = self.objective_of(d, np.abs(h).max(axis=1), float((self.mu * h.real).min()))
+        peaks = np.abs(h).max(axis=1)
+        f = self.objective_of(d, peaks, float((self.mu * h.real).min()))
         lv = res["loop_velocity"][:, self.in_loop]
         lp = res["loop_position"][:, self.in_loop]
         g = [limit * float(np.abs(1.0 + loop).min())
              for limit, loop in zip(self.ms, (lv, lp), strict=True)]
+        g += [cap / peaks[i] for i, cap in zip(self.held, self.caps, strict=True)]
         g += [1.0 + v for v in self.gate_rows(d, lv, lp)]
         g += [2.0 - (fixed + d.c * speed) / usable for fixed, speed, usable in self.thrust]
         if self.kv_min > 0:
@@ -322,6 +337,9 @@ def common_evaluation(grid: GridObjective, design: Design) -> dict:
                peak_compliance_models={mp.model.name: mp.peak_compliance for mp in models},
                worst_model=perf.worst_model.model.name if perf.worst_model else None,
                peak_frequency_hz=perf.peak_frequency / (2 * math.pi))
+    if grid.held:   # the NLP's caps of the held models (not a requirement check)
+        out["held_peaks_within_caps"] = all(
+            peaks[i] <= cap for i, cap in zip(grid.held, grid.caps, strict=True))
     ms_v = [mp.velocity.ms for mp in perf.models if mp.velocity is not None]
     ms_p = [mp.position.ms for mp in perf.models if mp.position is not None]
     if ms_v:
@@ -488,12 +506,15 @@ def main(argv=None):
                 for k, ev in evaluations.items() if k != "casadi"]
     out = {
         "case": f"{axis.name}: free {','.join(problem.free)}, {len(problem.regimes)} regime "
-                f"models, objective worst peak/h0 + {problem.mean_weight} mean peak/h0 + "
+                f"models, objective worst movable peak/h0 + {problem.mean_weight} mean movable "
+                f"peak/h0 + {HELD_WEIGHT:g} mean held peak/h0 (held capped) + "
                 f"{problem.tracking_weight} Kv0/Kv + {problem.c_cost_weight} C cost, Ms velocity "
                 f"<= {problem.requirements.ms_limit('velocity'):.4f}, Ms position <= "
-                f"{problem.requirements.ms_limit('position'):.4f}, loop hierarchy, Ti, current "
-                "loop, thrust, stable in every model",
+                f"{problem.requirements.ms_limit('position'):.4f}, loop hierarchy, Ti (lower "
+                "bound), current loop, thrust, stable in every model",
         "regime_models": [m.name for m in problem.regimes],
+        "held_models": [{"model": problem.regimes[grid.cut[i]].name, "cap_m_per_n": cap}
+                        for i, cap in zip(grid.held, grid.caps, strict=True)],
         "excluded_models": [m.name for m, _ in result.excluded],
         "initial_design": result.initial.to_dict(),
         "reference_start": None if result.start is None else result.start.to_dict(),
