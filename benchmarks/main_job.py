@@ -15,12 +15,14 @@ phase                    what is timed
                          the describing function; feeding: LuGre linearised at each feed speed)
 ``problem_setup``        the rest of :func:`servotune.design.tuning_problem` (bounds, thrust budget,
                          chatter target)
-``optimisation``         :func:`servotune.tuning.tune` without its python-control checks: stable
-                         starts, the casadi kernels (compiled to C when a compiler is found), the
-                         IPOPT solves and the grid exchange (sub-phases reported apart)
-``linear_verification``  the python-control checks inside ``tune``: :func:`~servotune.tuning.verify`
-                         of the initial and the tuned design in every regime model on dense grids,
-                         and :func:`~servotune.tuning.requirement_checks`
+``optimisation``         :func:`servotune.tuning.tune` without its linear checks: stable starts,
+                         the casadi kernels (compiled to C when a compiler is found), the IPOPT
+                         solves and the grid exchange (sub-phases reported apart)
+``linear_verification``  the linear checks inside ``tune``: :func:`~servotune.tuning.verify` of the
+                         initial and the tuned design in every regime model on dense grids (the
+                         exact sampled-data loop of a digital drive, the python-control state
+                         space of a continuous one), and
+                         :func:`~servotune.tuning.requirement_checks`
 ``analyses``             the rest of ``tune_axis``: process amplitude, realisation of C, loop
                          reports, compliance curves per regime, lobes, mode peaks against C
 ``verdict``              :func:`servotune.verdict.nonlinear_verdict` (LuGre time simulations, run by

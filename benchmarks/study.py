@@ -6,6 +6,9 @@ baseline) and then on two, each into a fresh folder, cluster start and shut-down
 ``speedup`` = wall time on 1 worker / wall time on 2; ``parallel_efficiency`` = speedup / 2;
 ``task_s_median`` the median time of one sample inside a worker, and ``overhead_s`` the wall
 time that the samples do not explain (cluster start, scheduling, writing rows) on 1 worker.
+A sample whose tuning raises (e.g. no stable start with the digital drive at a high friction
+draw) is a row with status ``failed``; it counts in the times as it ran, and ``failed`` gives
+their number in each run (the same draws in both).
 
     .venv/bin/python benchmarks/study.py --json [--samples 12]
 """
@@ -79,7 +82,8 @@ def main(argv=None) -> int:
     else:
         for r in (one, two):
             print(f"{r['workers']} worker(s): {r['samples']} samples in {r['wall_s']:.1f} s "
-                  f"({r['samples_per_s']:.3f}/s; a sample {r['task_s_median']:.2f} s)")
+                  f"({r['samples_per_s']:.3f}/s; a sample {r['task_s_median']:.2f} s; "
+                  f"{r['failed']} failed)")
         print(f"speedup {speedup:.2f}x, parallel efficiency {speedup / 2:.0%}")
     return 0
 
