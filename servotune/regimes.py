@@ -643,7 +643,7 @@ class FrictionSpread:
         """Return the corners of the box: every combination of the lows and highs.
 
         A corner whose Fs falls below its Fc keeps Fs and lowers Fc to it when the spread
-        lowered Fs, else raises Fs to Fc (no Stribeck drop either way).
+        lowered Fs, else raises Fs to Fc (no Stribeck drop either way; the label says so).
 
         Returns
         -------
@@ -663,8 +663,10 @@ class FrictionSpread:
             if fs < fc:
                 if "fs" in changes and changes["fs"] < self.nominal.fs:
                     changes["fc"] = fs
+                    labels.append("fc lowered to fs")
                 else:
                     changes["fs"] = fc
+                    labels.append("fs raised to fc")
             out.append((", ".join(labels), dataclasses.replace(self.nominal, **changes)))
         return tuple(out)
 

@@ -354,17 +354,13 @@ def verdict_lines(job) -> tuple[str, tuple[str, ...]]:
     """
     status = job.status
     r = job.result
-    if status == "verified" and job.verdict.nonlinear_holds is None:
-        head = "VERIFIED: " + job.verdict.checked[0]
-    elif status == "verified":
-        head = ("VERIFIED: the linear checks hold in every regime model and the nonlinear axis "
-                "holds the claim in every regime")
+    if job.verdict is not None:
+        head = job.verdict.headline
     elif status == "linear only":
         head = ("NOT VERIFIED (linear check only): the linear checks hold in every regime "
                 "model; the nonlinear verification was skipped")
     else:
-        reasons = list(job.verdict.reasons) if job.verdict is not None else list(r.reasons)
-        head = "NOT VERIFIED: " + ("; ".join(reasons) if reasons else "see the checks")
+        head = "NOT VERIFIED: " + ("; ".join(r.reasons) if r.reasons else "see the checks")
     lines = []
     if job.verdict is not None and job.verdict.nonlinear_holds is not None:
         lines += [f"checked: {c}" for c in job.verdict.checked]

@@ -15,8 +15,8 @@ the moving mass referred to the slide (slide, work piece, screw and motor inerti
 transmission), a the acceleration of rapid moves, v_r the rapid speed, F_cut the mean cutting
 force against the feed, and F_peak(v) = T_peak(v / r) / r, F_cont(v) = T_cont(v / r) / r the
 thrusts of the motor's torque-speed curve at the case's speed
-(:class:`servotune.drive.DriveLimits`: a data-sheet table, or the rated torques, flat up to the top speed or falling at
-constant power above a rated speed). The acceleration is checked where it ends, at v_r, where
+(:class:`servotune.drive.DriveLimits`: a data-sheet table, or the rated torques, flat up to
+the top speed or falling at constant power above a rated speed). The acceleration is checked where it ends, at v_r, where
 C v_r is largest (and a falling curve lowest); the start of a move, where the static friction
 F_s instead of g(v_r) can need more at a small C, is not checked. The traverse at constant rapid
 speed is a continuous load, however long the move. All axis friction is lumped at the guide

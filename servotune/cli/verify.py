@@ -243,6 +243,8 @@ def run(args) -> int:
     rows = [s.to_dict() for r in verdict.regimes for s in r.simulations]
     out = {"axis": str(axis.path), "axis_name": axis.name, "design": design.to_dict(),
            "verified": verdict.verified, "reasons": list(verdict.reasons),
+           "headline": verdict.headline, "coverage": verdict.coverage,
+           "coverage_text": verdict.coverage_text,
            "regimes": [r.to_dict() for r in verdict.regimes], "rows": rows,
            "checks": [c.to_dict() for c in result.checks], "folder": str(output.path)}
     with output.writing() as folder:
@@ -271,8 +273,7 @@ def run(args) -> int:
             else:
                 print(f"    fed at {s.speed * 1e3:.3g} mm/s without force: "
                       + ("stick-slip" if s.stick_slip else "slides steadily"))
-    print(("VERIFIED" if verdict.verified else "NOT VERIFIED") + (
-        "" if verdict.verified else ": " + "; ".join(verdict.reasons)))
+    print(verdict.headline)
     print(f"  wrote {output.path} ({', '.join(names)})")
     return status
 

@@ -440,10 +440,30 @@ class SampledAxis:
         ok, p = self._stability
         if ok:
             return
-        bad = p[np.isfinite(p.real) & (p.real > 1e-9 * np.abs(p))]
+        # the frame's multipliers know a frequency only modulo the frame rate: where the
+        # faster loops (between the position controller's updates) grow on their own, their
+        # multipliers over one velocity period name it up to the speed controller's Nyquist
+        fast = None
+        if self.controller.frame > self.n_v:
+            maps = self.controller.sample_maps(self.ad, self.bd, self.cy)
+            m = maps[1][0]
+            for phi, _ in maps[2:1 + self.n_v]:
+                m = phi @ m
+            fast_ok, q = multipliers_stable(m, self.velocity_period)
+            if not fast_ok:
+                fast = q
+        if fast is not None:
+            bad = fast[np.isfinite(fast.real) & (fast.real > 1e-9 * np.abs(fast))]
+            note = ""
+        else:
+            bad = p[np.isfinite(p.real) & (p.real > 1e-9 * np.abs(p))]
+            note = (f" (a frequency modulo the position controller's rate, "
+                    f"{1.0 / self.frame:.4g} Hz)")
+        # one of each conjugate pair, and not the integrators' rounding (well below 1e-3 1/s)
+        bad = bad[(bad.imag >= 0) & (bad.real > 1e-3 * max(1.0, float(bad.real.max())))]
         bad = bad[np.argsort(-bad.real)][:4]
         listed = ", ".join(f"grows at {q.real:.3g} 1/s near {abs(q.imag) / (2 * math.pi):.4g} Hz"
-                           for q in bad)
+                           for q in bad) + note
         raise UnstableLoopError(
             f"the {what} is unstable as the sampled-data system the drive is ({listed}); "
             "lower the loop gains (Kv, Kp) or raise Ti, or add damping")

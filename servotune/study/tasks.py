@@ -118,7 +118,8 @@ def run_sample(settings: dict, sample: dict) -> dict:
         if "verify" in compute:
             from ..verdict import nonlinear_verdict
 
-            verdict = nonlinear_verdict(axis, result, simulate_before=False)
+            # a study samples the friction itself: each sample is judged at its own friction
+            verdict = nonlinear_verdict(axis, result, simulate_before=False, spread=None)
             peaks = [r.nonlinear_peak_after for r in verdict.regimes
                      if r.nonlinear_peak_after is not None]
             row.update({"verified": bool(verdict.verified),
