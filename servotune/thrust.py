@@ -9,19 +9,19 @@ with what the drive gives, at the slide (SI)::
     feeding at each v_f (continuous):    g(v_f) + C v_f + F_cut  <= (1 - margin) F_cont(v_f)
 
 (and, without feed speeds, standing against the cutting force: F_cut <= (1 - margin) F_cont(0)),
-with g(v) the Coulomb-Stribeck friction of the guide ways (LuGre steady state without its viscous
-part), C the total viscous damping (the identified sigma2 or the design's C that replaces it), m
-the moving mass referred to the slide (slide, work piece, screw and motor inertia through the
-transmission), a the acceleration of rapid moves, v_r the rapid speed, F_cut the mean cutting
-force against the feed, and F_peak(v) = T_peak(v / r) / r, F_cont(v) = T_cont(v / r) / r the
-thrusts of the motor's torque-speed curve at the case's speed
-(:class:`servotune.drive.DriveLimits`: a data-sheet table, or the rated torques, flat up to
-the top speed or falling at constant power above a rated speed). The acceleration is checked where it ends, at v_r, where
-C v_r is largest (and a falling curve lowest); the start of a move, where the static friction
-F_s instead of g(v_r) can need more at a small C, is not checked. The traverse at constant rapid
-speed is a continuous load, however long the move. All axis friction is lumped at the guide
-ways (the paper's sec 3), so the transmission's efficiency is already in the friction and is
-taken as 1.
+with g(v) the Coulomb-Stribeck friction of the guide ways (LuGre steady state without its
+viscous part), C the total viscous damping (the identified sigma2 or the design's C that
+replaces it), m the moving mass referred to the slide (slide, work piece, screw and motor
+inertia through the transmission), a the acceleration of rapid moves, v_r the rapid speed, F_cut
+the mean cutting force against the feed, and F_peak(v) = T_peak(v / r) / r, F_cont(v) = T_cont(v
+/ r) / r the thrusts of the motor's torque-speed curve at the case's speed
+(:class:`servotune.drive.DriveLimits`: a data-sheet table, or the rated torques, flat up to the
+top speed or falling at constant power above a rated speed). The acceleration is checked where
+it ends, at v_r, where C v_r is largest (and a falling curve lowest); the start of a move, where
+the static friction F_s instead of g(v_r) can need more at a small C, is not checked. The
+traverse at constant rapid speed is a continuous load, however long the move. All axis friction
+is lumped at the guide ways (the paper's sec 3), so the transmission's efficiency is already in
+the friction and is taken as 1.
 
 Each case is affine in C, ``F_fix + C v <= F_usable``, so the largest C the budget allows is
 ``min over the cases with v > 0 of (F_usable - F_fix) / v`` (:meth:`ThrustBudget.c_max`).

@@ -1,6 +1,7 @@
 """The design job: servotune tune on the bundled models against closed forms and the
 independent verification."""
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -45,21 +46,35 @@ def test_tune_keeps_a_file_that_is_not_its_own(tmp_path, capsys):
     assert (folder / "notes.txt").read_text() == "mine"
 
 
-def test_the_bundled_axis_is_verified_regime_by_regime(bundled_job):
+def test_the_bundled_axis_is_judged_regime_by_regime_over_its_friction_variation(bundled_job):
     # make demo's job: the paper's gains are unstable with the digital drive (the paper's
-    # model is continuous); the tuned design holds every requirement in every regime model and
-    # the nonlinear axis stays within 30 % of each regime's claim
+    # model is continuous); the tuned design holds every requirement in every regime model of
+    # the nominal friction and the nonlinear axis stays within 30 % of each regime's claim
+    # there; over the paper's measured variation of the friction (the corners of [friction]
+    # variation) the feeding regime at 6.67 mm/s loses its stability where Fs and sigma0 are
+    # both high, which the verdict names (tests/test_verdict_spread.py confirms it in time)
+    from servotune.digital import SampledAxis
+    from servotune.regimes import RegimeModel
+
     axis, job = bundled_job
     out = job.to_dict()
     assert out["stable_before"] is False
-    assert job.verified, out["reasons"]
     req = axis.requirements
     assert out["ms_velocity"] <= req.ms_limit("velocity") * 1.005
     assert out["ms_position"] <= req.ms_limit("position") * 1.005
     for regime in out["regimes"]:
-        assert regime["holds"], regime["reason"]
-        assert regime["nonlinear_peak_after_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]
+        assert regime["nonlinear_peak_after_nominal_m_per_n"] <= (
+            1.3 * regime["claimed_peak_m_per_n"])
     assert out["thrust"]["fits"] is True
+    assert not job.verified and "feeding 6.67 mm/s" in " ".join(out["reasons"])
+    assert "fs +258 N" in " ".join(out["reasons"])
+    # the corner by hand: the sliding model at Fs + 258 N, sigma0 + 1.17e9 N/m is unstable
+    p = axis.friction.lugre
+    corner = dataclasses.replace(p, fs=p.fs + 258.0, sigma0=p.sigma0 + 1.17e9)
+    model = RegimeModel("feeding 6.67 mm/s", "sliding", corner, speed=6.67e-3)
+    drive = job.result.problem.drive_for(job.design)
+    assert not SampledAxis(axis.structure, drive, model.contact(job.design.c),
+                           axis.pads).is_stable()
     # second method: python-control's own frequency response of the tuned loops, as the
     # discrete state spaces of the sampled-data loops (the velocity loop at the speed
     # controller's rate, the position loop lifted to its own: independent of the algebra the

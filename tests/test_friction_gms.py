@@ -5,6 +5,7 @@ for the time simulation, its periodic orbit, and the bundled axis simulated with
 
 import dataclasses
 import math
+import re
 import shutil
 
 import numpy as np
@@ -259,7 +260,9 @@ def test_the_axis_file_selects_the_law(tmp_path):
 
     folder = tmp_path / "axis"
     shutil.copytree("models/paper_x_axis", folder)
-    text = (folder / "axis.toml").read_text()
+    # a variation of the identified LuGre set has no meaning for a GMS law: left out
+    text = re.sub(r"variation = \{[^}]*\}[^\n]*\n(\s+#[^\n]*\n)*", "",
+                  (folder / "axis.toml").read_text())
     start = text.index("[friction.lugre]")
     end = text.index("[drive]")
     table = "\n".join(f"{k} = {v!r}" for k, v in (

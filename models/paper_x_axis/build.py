@@ -275,7 +275,7 @@ modal_damping = 0.03            # on every mode of the stored model (paper, sec 
 [friction]                      # all axis friction lumped at the guide-way pads (paper, sec 3)
 pads = ["pad1.x", "pad2.x", "pad3.x", "pad4.x"]   # relative X, slide minus guide way
 viscous = 5578.0                # viscous-only model: sigma2 of the identified set [N s/m]
-variation = { fs = 258.0, sigma0 = 1.17e9, sigma1 = 1.3e6 }   # +- of the identified set over
+variation = {{ fs = 258.0, sigma0 = 1.17e9, sigma1 = 1.3e6 }}   # +- of the identified set over
                                 # the paper's six tests ("var" column, table after Fig 8), SI:
                                 # the nonlinear verdict checks the corners of this box
 
