@@ -744,6 +744,12 @@ def _receptance_compliance(receptance, model, c, omega) -> np.ndarray:
     return np.abs(g[n, n] - z * np.einsum("jk,kj->k", g[n, :n], x))
 
 
+def _corner_levels(levels) -> list[float]:
+    """The force levels harmonic balance scans at a spread corner: the two largest of the
+    regime's simulated levels (the process force and three times it)."""
+    return sorted(levels)[-2:]
+
+
 def _corner_claim(problem, drive, receptance, models, c, omega) -> tuple[float, str]:
     """The worst compliance peak of a regime's models with one friction, and why there is
     none (a model unstable with the design: inf)."""
@@ -1032,8 +1038,11 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
                          "unstable": unstable, "scan": (), "note": "",
                          "axis": design_axis(axis, problem, result.design, friction=params)})
         rows_of[name] = rows
-        # an unstable corner has no periodic response to speak of (its claim fails)
-        args = ([r["axis"] for r in rows if not r["unstable"]], speed, levels, band)
+        # an unstable corner has no periodic response to speak of (its claim fails); the
+        # corners are scanned at the process force and above (the smallest level of a standing
+        # regime is the presliding contact's, which the corner's linear claim already covers)
+        args = ([r["axis"] for r in rows if not r["unstable"]], speed, _corner_levels(levels),
+                band)
         hb_jobs[name] = args if executor is None else executor.submit(harmonic_scans, *args)
     scanned = {name: _harmonic_or_why(nl, speed, f, band) for name, nl, speed, f, band in scans}
     if executor is not None:
@@ -1169,7 +1178,7 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
     nonlinear_holds = all(v.holds for v in verdicts)
     reasons += failures
     levels_of = {name: regime_info[name][7] for name in regimes}
-    corner_levels_of = {name: regime_info[name][6] for name in spread_regimes}
+    corner_levels_of = {name: _corner_levels(regime_info[name][6]) for name in spread_regimes}
     simulated = {v.name: {"nominal": sorted({s.force_pp for s in v.simulations
                                             if s.kind == "sweep" and s.design == "after"}),
                           "corners": {c.label: sorted({s.force_pp for s in c.simulations

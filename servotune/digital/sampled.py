@@ -531,13 +531,19 @@ class SampledAxis:
             g_vphi, g_vx, self._k("velocity", "motor_angle", omega, self.velocity_period),
             self._k("velocity", "omega_cmd", omega, self.velocity_period))
 
-    def _position(self, omega):
+    def _position(self, omega, with_velocity: bool = False):
         omega = np.asarray(omega, dtype=float)
         shifts = omega[..., None] + 2 * math.pi / self.position_period * np.arange(self.n_p)
         vel = self._velocity(shifts)
         g_px = lift(vel.x_omega, omega, self.velocity_period, self.n_p)
-        return cascade.position_level(g_px, self._k("position", "x_fb", omega,
-                                                    self.position_period))
+        pos = cascade.position_level(g_px, self._k("position", "x_fb", omega,
+                                                   self.position_period))
+        if not with_velocity:
+            return pos
+        # the velocity level at omega itself is the first shift's
+        first = type(vel)(*(np.asarray(getattr(vel, f))[..., 0] for f in
+                            ("l_v", "r_v", "x_omega", "g_vphi", "g_vx")))
+        return pos, first
 
     def nyquist(self, loop: str) -> float:
         """Return half the sample rate [rad/s] of a loop's controller.

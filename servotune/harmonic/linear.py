@@ -204,7 +204,7 @@ class SampledPadReceptance:
     #: The table's range [Hz] and its points per decade (cubic splines of the real and
     #: imaginary parts in log frequency; outside it the receptance is evaluated directly).
     TABLE_HZ = (0.05, 3900.0)
-    TABLE_PER_DECADE = 1000
+    TABLE_PER_DECADE = 600
 
     def __init__(self, structure: ModalModel, drive: Drive, pads, force_dof: str,
                  output_dof: str):
@@ -255,10 +255,10 @@ class SampledPadReceptance:
         """The receptance at angular frequencies ``omega`` [rad/s] (> 0), shape
         (n + 1, n + 1, K) as :meth:`PadReceptance.__call__`.
 
-        Harmonic balance asks for it at many frequencies: it is tabulated once (1000 points
+        Harmonic balance asks for it at many frequencies: it is tabulated once (600 points
         per decade over :attr:`TABLE_HZ`, below the speed controller's Nyquist frequency) and
-        interpolated by cubic splines in log frequency (within 1e-6 of the direct evaluation
-        on the bundled axis, tests/test_digital_harmonic.py); outside the table it is
+        interpolated by cubic splines in log frequency (within 2e-6 of the direct evaluation
+        on the bundled axis, tests/test_harmonic_balance.py); outside the table it is
         evaluated directly."""
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
         if not np.all(np.isfinite(omega) & (omega > 0.0)):

@@ -188,9 +188,7 @@ def sampled_corrections(problem: TuningProblem, omega: np.ndarray, reference: De
             out[m, 3] = vel.g_vphi - parts["hold_v"] * cur.phi_t
             out[m, 4] = vel.g_vx - parts["hold_v"] * cur.x_t
         if below.any():
-            w = omega[below]
-            vel = sa._velocity(w)
-            pos = sa._position(w)
+            pos, vel = sa._position(omega[below], with_velocity=True)
             out[m, 5, below] = pos.g_px - parts["hold_p"][below] * vel.x_omega
     return out
 

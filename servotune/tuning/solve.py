@@ -388,7 +388,7 @@ def _moved_multipliers(old: Solver, old_grids: _Grids, new: Solver, new_grids: _
 
 def _scale_factors(problem: TuningProblem, design: Design) -> tuple[float, float]:
     """Peak and -min Re(mu G) of a design over the cutting models, for scaling."""
-    model = ResponseModel(problem, grid(*problem.requirements.band, 4000), design)
+    model = ResponseModel(problem, grid(*problem.requirements.band, 1500), design)
     h = model(design)["compliance"][list(problem.cutting_models)]
     mu = problem.chatter.mu if problem.chatter is not None else 1.0
     return float(np.abs(h).max()), float(max(-(mu * h.real).min(), 1e-30))
@@ -747,7 +747,8 @@ def exchange_grids(problem: TuningProblem, kernels: Kernels, grids: _Grids, gamm
     return ExchangeOutcome(design, best, solver, grids, rounds, worst, failed, iterations)
 
 
-def predict(problem: TuningProblem, design: Design) -> Prediction:
+def predict(problem: TuningProblem, design: Design,
+            reference: Design | None = None) -> Prediction:
     """The optimiser's port model at ``design`` on a fine band grid (6000 frequencies).
 
     Parameters
@@ -756,14 +757,19 @@ def predict(problem: TuningProblem, design: Design) -> Prediction:
         The problem.
     design : Design
         The design.
+    reference : Design, optional
+        Where a digital drive's corrections were made exact (the tuning's reference start;
+        default ``design`` itself).
 
     Returns
     -------
     Prediction
         Peaks per cutting model and the limiting depth of cut.
     """
+    # the optimiser's own values: the corrections of a digital drive as it used them
+    ref = design if reference is None else reference
     h = ResponseModel(problem, grid(*problem.requirements.band, 6000),
-                      design)(design)["compliance"]
+                      ref)(design, exact=False)["compliance"]
     cut = list(problem.cutting_models)
     b_crit = None
     if problem.chatter is not None:
@@ -997,7 +1003,7 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
                         max_exchange, tolerance, callback)
     # 4. the optimiser's prediction and the independent check
     active = _active(problem, ex.design, ex.solver, ex.best)
-    pred = predict(problem, ex.design)
+    pred = predict(problem, ex.design, reference)
     reasons = []
     if ex.failed:
         reasons.append("the optimiser could not satisfy the constraints at frequencies added by "
