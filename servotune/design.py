@@ -15,6 +15,7 @@ C against the closed-form fixed-point optimum (paper sec 4.1).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -28,13 +29,28 @@ from .digital import SampledAxis
 from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
-from .tuning import ChatterTarget, Design, TuningProblem, TuningResult, TuningStatistics, tune
+from .tuning import (
+    ChatterTarget,
+    Design,
+    NoStableStartError,
+    RequirementsNotMetError,
+    TuningDidNotConvergeError,
+    TuningProblem,
+    TuningResult,
+    TuningStatistics,
+    tune,
+)
 from .units import HZ_PER_RAD_S
 
 __all__ = [
     "DEFAULT_BOUNDS",
     "TwoMassCheck",
     "AxisTuning",
+    "TuningRound",
+    "MAX_ROUNDS",
+    "spread_screen",
+    "refuted_models",
+    "stabilising_damping",
     "ModePeaks",
     "tuning_problem",
     "two_mass_check",
@@ -490,6 +506,9 @@ class AxisTuning:
     c_realisation: tuple[CRealisation, ...] = ()
     process: dict | None = None
     notes: tuple[str, ...] = field(default=())
+    rounds: tuple = ()
+    """The rounds of tuning and verification (:class:`TuningRound`): a refuted operating point
+    (a corner of the friction's spread) becomes a model of the next round's tuning."""
     kp_limit: dict | None = None
     """With a digital drive whose initial design is unstable: the largest velocity-loop Kp
     that keeps the reference model's velocity loop stable at the initial Ti (position loop
@@ -592,6 +611,7 @@ class AxisTuning:
             "two_mass_check": None if self.two_mass is None else self.two_mass.to_dict(),
             "mode_peaks": None if self.mode_peaks is None else self.mode_peaks.to_dict(),
             "kp_limit": self.kp_limit,
+            "rounds": [x.to_dict() for x in self.rounds],
             "notes": list(self.notes),
         }
         return out
@@ -827,11 +847,281 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     free = settings.free if free is None else free
     chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight
     bounds = {**settings.bounds, **(bounds or {})}
-    problem = tuning_problem(axis, free, chatter_weight, bounds, c0)
+    base = tuning_problem(axis, free, chatter_weight, bounds, c0)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
         tolerance = 1e-10 if two_mass else 1e-6
-    result = tune(problem, starts=starts, seed=seed, tolerance=tolerance, callback=callback)
+    rounds, added, c_floor, last = [], (), None, None
+    if simulate and "c" in free:
+        # the verdict's linear screen of the friction spread, before the first round: the
+        # corners unstable at the first stable start join the tuning (the worst of each
+        # regime), with the least damping that holds them as the floor of C
+        added, c_floor, note = _prescreen(axis, base)
+        if note:
+            rounds.append(TuningRound(0, None, note, tuple(m.name for m in added)))
+    for number in range(1, MAX_ROUNDS + 1):
+        problem = base
+        if c_floor is not None:
+            hi = base.bounds["c"][1]
+            problem = tuning_problem(axis, free, chatter_weight,
+                                     {**bounds, "c": (c_floor, hi)}, max(c_floor, base.c))
+        if added:
+            problem = dataclasses.replace(problem, regimes=problem.regimes + added)
+        try:
+            # a later round starts from the last design (C raised to its new floor) and
+            # needs fewer starts
+            first = () if last is None else (dataclasses.replace(
+                last.design, c=max(last.design.c, c_floor or 0.0)),)
+            result = tune(problem, starts=starts if last is None else min(starts, 2),
+                          seed=seed, tolerance=tolerance, callback=callback, first=first)
+        except (RequirementsNotMetError, NoStableStartError, TuningDidNotConvergeError) as exc:
+            if number == 1:
+                raise
+            # a later round found no design: the last one stands, with the reason
+            rounds.append(TuningRound(number, None, f"no design: {exc}", ()))
+            job = _finish(axis, last, simulate, executor, progress, two_mass)
+            return dataclasses.replace(job, rounds=tuple(rounds))
+        last = result
+        # the linear screen of the friction's spread: a corner whose model is unstable with
+        # the design is refuted before anything is simulated; one whose instability no gain
+        # reaches (a pad mode the friction's falling slope destabilises) needs damping: the
+        # least C that holds it becomes the lower bound of C in the next round
+        new = spread_screen(axis, result.problem, result.design) if simulate else ()
+        new = tuple(m for m in new if m.name not in {a.name for a in added})
+        if new and number < MAX_ROUNDS:
+            needs = []
+            if "c" in problem.free:
+                hi = problem.bounds["c"][1]
+                for m in new:
+                    c_min = stabilising_damping(result.problem, result.design, m, hi)
+                    if c_min is not None and c_min > result.design.c:
+                        needs.append((m, c_min))
+            text = "; ".join(f"{m.name} is unstable" for m in new)
+            if needs:
+                c_need = max(c for _, c in needs)
+                c_floor = max(c_floor or 0.0, C_FLOOR_MARGIN * c_need)
+                text += (f" (with these gains it needs C >= {c_need:.4g} N s/m: the next "
+                         f"round keeps C >= {c_floor:.4g} N s/m)")
+            rounds.append(TuningRound(
+                number, result.design, "not verified by the linear screen of the friction "
+                f"spread: {text}", tuple(m.name for m in new)))
+            added += new
+            continue
+        job = _finish(axis, result, simulate, executor, progress, two_mass)
+        new = refuted_models(job) if simulate else ()
+        new = tuple(m for m in new if m.name not in {a.name for a in added})
+        if job.verified or not new or number == MAX_ROUNDS:
+            rounds.append(TuningRound(number, result.design, _round_verdict(job), ()))
+            return dataclasses.replace(job, rounds=tuple(rounds))
+        rounds.append(TuningRound(number, result.design, _round_verdict(job),
+                                  tuple(m.name for m in new)))
+        added += new
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+#: Rounds of tuning and verification at most: a refuted operating point becomes a model.
+MAX_ROUNDS = 3
+#: The lower bound of C after a round whose spread corner needed damping: this times the least
+#: C that holds the corner with the round's gains.
+C_FLOOR_MARGIN = 1.1
+
+
+def stabilising_damping(problem: TuningProblem, design: Design, model: RegimeModel,
+                        c_max: float, rtol: float = 1e-3) -> float | None:
+    """Return the least guide-way damping C that makes a regime model stable with a design's
+    gains, or None when even ``c_max`` does not.
+
+    Bisection in log C on the closed loop's stability (the sampled-data multipliers of a
+    digital drive) between the design's C and ``c_max``.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem (structure, pads, drive).
+    design : Design
+        The design whose gains are kept.
+    model : RegimeModel
+        The model.
+    c_max : float
+        The largest C allowed [N s/m].
+    rtol : float
+        Relative width of the final bracket.
+
+    Returns
+    -------
+    float or None
+        The least stable C [N s/m] (the design's own C when it is stable already).
+    """
+    from .closed_loop import closed_loop
+
+    def stable(c):
+        d = dataclasses.replace(design, c=c)
+        return closed_loop(problem.structure, problem.drive_for(d), model.contact(c),
+                           problem.pads).is_stable()
+
+    lo = max(design.c, 1e-9)
+    if stable(lo):
+        return lo
+    if not stable(c_max):
+        return None
+    hi = c_max
+    while hi / lo > 1.0 + rtol:
+        mid = math.sqrt(lo * hi)
+        lo, hi = (lo, mid) if stable(mid) else (mid, hi)
+    return hi
+
+
+@dataclass(frozen=True)
+class TuningRound:
+    """One round of tuning and verification.
+
+    Attributes
+    ----------
+    number : int
+        1, 2, ...
+    design : Design
+        The round's design.
+    verdict : str
+        What the round's check said (the verdict's headline, or the linear screen).
+    added : tuple of str
+        The models added to the tuning for the next round (the refuted operating points).
+    """
+
+    number: int
+    design: Design | None
+    verdict: str
+    added: tuple[str, ...]
+
+    def to_dict(self) -> dict:
+        """Return the round JSON-ready.
+
+        Returns
+        -------
+        dict
+            ``number``, ``design`` (None: the round found none), ``verdict``,
+            ``added_models``.
+        """
+        return {"number": self.number,
+                "design": None if self.design is None else self.design.to_dict(),
+                "verdict": self.verdict, "added_models": list(self.added)}
+
+
+def _round_verdict(job) -> str:
+    if job.verdict is not None:
+        return job.verdict.headline
+    return "linear only" if job.result.success else "; ".join(job.result.reasons)
+
+
+def _prescreen(axis: Axis, problem: TuningProblem):
+    """The spread corners unstable at the problem's first stable start, the worst (most
+    damping needed) of each regime, the floor of C they need, and what to say of it."""
+    from .tuning.solve import stable_starts
+
+    try:
+        start = stable_starts(problem, 1).designs[0]
+    except IndexError:
+        return (), None, ""
+    unstable = spread_screen(axis, problem, start)
+    if not unstable:
+        return (), None, ""
+    hi = problem.bounds["c"][1]
+    worst = {}
+    for m in unstable:
+        c_min = stabilising_damping(problem, start, m, hi)
+        key = m.regime
+        if key not in worst or (c_min or math.inf) > (worst[key][1] or math.inf):
+            worst[key] = (m, c_min)
+    models = tuple(m for m, _ in worst.values())
+    needs = [c for _, c in worst.values() if c is not None]
+    c_floor = C_FLOOR_MARGIN * max(needs) if needs else None
+    text = ("the linear screen of the friction spread at the first stable start: "
+            + "; ".join(f"{m.name} is unstable" for m in models)
+            + (f" (it needs C >= {max(needs):.4g} N s/m: the tuning keeps C >= "
+               f"{c_floor:.4g} N s/m and includes these models)" if needs
+               else " (no C within its bounds holds it: the tuning includes these models)"))
+    if c_floor is not None and c_floor <= problem.bounds["c"][0]:
+        c_floor = None
+    return models, c_floor, text
+
+
+def spread_screen(axis: Axis, problem: TuningProblem, design: Design) -> tuple:
+    """Return the regime models of the friction spread's corners that are unstable with a
+    design.
+
+    The corners are the verdict's (:func:`servotune.verdict.verdict_spread`: ``[tuning]
+    friction_spread``, else the identified set's own variation); each regime model of the
+    nominal friction is taken with each corner's friction and its closed loop checked for
+    stability (the sampled-data multipliers of a digital drive). Cheap, so it runs before the
+    nonlinear verdict.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+    problem : TuningProblem
+        The tuning problem (its nominal regime models).
+    design : Design
+        The design.
+
+    Returns
+    -------
+    tuple of RegimeModel
+        The unstable corner models (labelled by their corner), in order.
+    """
+    from .closed_loop import closed_loop
+    from .verdict import verdict_spread
+
+    if axis.friction is None or axis.drive is None:
+        return ()
+    box = verdict_spread(axis)
+    if box is None:
+        return ()
+    drive = problem.drive_for(design)
+    out = []
+    for label, params in box.corners():
+        for m in problem.regimes:
+            if m.sample != "nominal" or m.friction is None:
+                continue
+            corner = dataclasses.replace(m, friction=params, sample=label)
+            loop = closed_loop(problem.structure, drive, corner.contact(design.c), problem.pads)
+            if not loop.is_stable():
+                out.append(corner)
+    return tuple(out)
+
+
+def refuted_models(job) -> tuple:
+    """Return the corner models a verdict refuted (unstable, or a periodic response above the
+    claim), as regime models to tune for.
+
+    Parameters
+    ----------
+    job : AxisTuning
+        A job with its verdict.
+
+    Returns
+    -------
+    tuple of RegimeModel
+        For each regime that does not hold, the regime's nominal models with the friction of
+        each of its corners that does not hold.
+    """
+    if job.verdict is None:
+        return ()
+    problem = job.result.problem
+    out = []
+    for regime in job.verdict.regimes:
+        for corner in getattr(regime, "corners", ()):
+            if corner.holds:
+                continue
+            for m in problem.regimes:
+                if m.regime == regime.name and m.sample == "nominal":
+                    out.append(dataclasses.replace(m, friction=corner.friction,
+                                                   sample=corner.label))
+    return tuple(out)
+
+
+def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress,
+            two_mass: bool) -> AxisTuning:
+    """The analyses and the verdict of a tuned design."""
     problem = result.problem
     out = {"axis": axis, "result": result, "notes": tuple(axis.defaults)}
     out["two_mass"] = two_mass_check(axis, result) if two_mass else None
