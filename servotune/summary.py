@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from .drive import kv_to_m_per_min_per_mm
 from .units import HZ_PER_RAD_S
 
-__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "loops_table",
+__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "rounds_table", "loops_table",
            "thrust_table", "realisation_table", "verdict_lines", "text", "html_table"]
 
 
@@ -199,6 +199,35 @@ def regimes_table(job) -> Table:
     return Table("Regimes: worst compliance peak [m/N], linear claim and nonlinear axis",
                  ("regime", "claim before", "claim after", "nonlinear before",
                   "nonlinear after", "realised", "holds"), tuple(rows), notes)
+
+
+def rounds_table(job) -> Table | None:
+    """Return the rounds of tuning and verification (None when there was one plain round).
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table or None
+        One row per round: its design, what its check said and the models added for the next.
+    """
+    rounds = getattr(job, "rounds", ())
+    if not rounds or (len(rounds) == 1 and not rounds[0].added):
+        return None
+    rows = []
+    for r in rounds:
+        d = r.design
+        design = ("-" if d is None else
+                  f"C {d.c:.4g}, Kv {d.kv:.4g}, Kp {d.kp:.4g}, Ti {d.ti * 1e3:.4g} ms"
+                  if d.kv is not None else f"C {d.c:.4g}")
+        label = "screen" if r.number == 0 else str(r.number)
+        rows.append((label, design, r.verdict if len(r.verdict) < 160 else
+                     r.verdict[:157] + "...", ", ".join(r.added) or "-"))
+    return Table("Rounds: a refuted operating point becomes a model of the next round",
+                 ("round", "design", "check", "added to the tuning"), tuple(rows))
 
 
 def _linear_claims(job):

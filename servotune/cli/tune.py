@@ -206,7 +206,7 @@ def run(args) -> int:
         print(f"  note: {line}")
     for line in checks.warnings:
         print(f"  WARNING: {line}")
-    for table in (summary.inputs_table(job), summary.design_table(job),
+    for table in (summary.inputs_table(job), summary.rounds_table(job), summary.design_table(job),
                   summary.regimes_table(job), summary.thrust_table(job),
                   summary.realisation_table(job), summary.loops_table(job)):
         if table is not None:
