@@ -41,6 +41,7 @@ Every error names the file, the field and what to do about it.
 
 from __future__ import annotations
 
+import copyreg
 import dataclasses
 import itertools
 import math
@@ -89,6 +90,25 @@ _PORT_FIX = ('name each port by node and direction, "pad1.x" = { node = 101, dir
 
 class AxisFormatError(ValueError):
     """An axis description that cannot be used; the message names file, field and fix."""
+
+
+def read_only(mapping) -> MappingProxyType:
+    """Return a read-only view of a copy of ``mapping`` (the axis' settings tables).
+
+    Parameters
+    ----------
+    mapping : Mapping
+        The table.
+
+    Returns
+    -------
+    types.MappingProxyType
+    """
+    return MappingProxyType(dict(mapping))
+
+
+# read-only tables pickle as their contents (an axis goes to the workers of a process pool)
+copyreg.pickle(MappingProxyType, lambda m: (read_only, (dict(m),)))
 
 
 def _frozen(value):

@@ -51,6 +51,7 @@ __all__ = [
     "spread_screen",
     "refuted_models",
     "stabilising_damping",
+    "baseline_comparison",
     "ModePeaks",
     "tuning_problem",
     "two_mass_check",
@@ -506,6 +507,13 @@ class AxisTuning:
     c_realisation: tuple[CRealisation, ...] = ()
     process: dict | None = None
     notes: tuple[str, ...] = field(default=())
+    as_given: dict | None = None
+    """When the tuning started from the commissioning design: the axis as given (its design,
+    current loop, the nominal models it is unstable in, the largest stable Kp)."""
+    baseline: dict | None = None
+    """The designs a commissioning engineer and the textbook would make
+    (:func:`baseline_comparison`), each with its claim per regime (linear, and by harmonic
+    balance with the verification)."""
     rounds: tuple = ()
     """The rounds of tuning and verification (:class:`TuningRound`): a refuted operating point
     (a corner of the friction's spread) becomes a model of the next round's tuning."""
@@ -612,6 +620,8 @@ class AxisTuning:
             "mode_peaks": None if self.mode_peaks is None else self.mode_peaks.to_dict(),
             "kp_limit": self.kp_limit,
             "rounds": [x.to_dict() for x in self.rounds],
+            "baseline": self.baseline,
+            "as_given": self.as_given,
             "notes": list(self.notes),
         }
         return out
@@ -791,8 +801,17 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
               starts: int = 4, bounds: dict | None = None, seed: int = 0,
               tolerance: float | None = None, simulate: bool = False,
               executor=None, c0: float | None = None, callback=None,
-              progress=None) -> AxisTuning:
+              progress=None, commission: bool = True) -> AxisTuning:
     """Tune an axis, verify it, and gather the before/after analyses.
+
+    The tuning starts where a commissioning engineer ends
+    (:func:`servotune.baseline.commissioning_design`): with a drive, friction and an
+    operation, the current loop and the set-point filters of the commissioning design replace
+    the axis' own (said in the notes; ``commission=False`` keeps them) and its design is the
+    first start. A friction spread's corners that the first stable start leaves unstable join
+    the tuning, with the least damping that holds them as the floor of C; a round whose design
+    the verdict refutes at an operating point (a corner of the spread) is tuned again with it,
+    up to :data:`MAX_ROUNDS` rounds.
 
     Parameters
     ----------
@@ -821,6 +840,8 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         IPOPT's iteration callback (e.g. to honour an interruption).
     progress : callable, optional
         ``progress(done, total)`` of the nonlinear simulations.
+    commission : bool
+        Start from the commissioning engineer's design, with its current loop and filters.
 
     Returns
     -------
@@ -847,11 +868,48 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     free = settings.free if free is None else free
     chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight
     bounds = {**settings.bounds, **(bounds or {})}
+    given = axis
+    commissioned, commission_notes = None, ()
+    if (commission and axis.drive is not None and axis.friction is not None
+            and axis.operation is not None):
+        from .baseline import commissioning_design
+
+        commissioned = commissioning_design(axis)
+        d, own = commissioned.drive, axis.drive
+        commission_notes = (
+            "the tuning starts from the commissioning design (servotune.baseline): its current "
+            f"loop {d.current_loop.kp:.4g} V/A, {d.current_loop.ti * 1e3:.4g} ms (technical "
+            f"optimum; the axis gives {own.current_loop.kp:.4g} V/A, "
+            f"{own.current_loop.ti * 1e3:.4g} ms)"
+            + (f", its notch at {d.notch.f_hz:.4g} Hz" if d.notch is not None else "")
+            + (f", its low-pass at {d.lowpass.f_hz:.4g} Hz" if d.lowpass is not None else "")
+            + f" and its gains (Kv {d.kv:.4g} 1/s, Kp {d.velocity_loop.kp:.4g} N m s/rad, "
+            f"Ti {d.velocity_loop.ti * 1e3:.4g} ms) as its start: the 'before' of the tables "
+            "(commission=False, --no-commission: the axis' own)",)
+        axis = dataclasses.replace(axis, drive=d, defaults=tuple(axis.defaults)
+                                   + commission_notes)
+        if c0 is None:
+            c0 = commissioned.c
     base = tuning_problem(axis, free, chatter_weight, bounds, c0)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
         tolerance = 1e-10 if two_mass else 1e-6
     rounds, added, c_floor, last = [], (), None, None
+    # the baseline designs, on another worker while the tuning runs
+    comparison = None
+    if axis.drive is not None and axis.friction is not None and axis.operation is not None:
+        nominal = tuple(m for m in base.regimes if m.sample == "nominal")
+        comparison = (executor.submit(baseline_comparison, given, nominal, simulate,
+                                      commissioned)
+                      if executor is not None else (given, nominal, simulate, commissioned))
+
+    def attach(job):
+        if comparison is None:
+            return job
+        value = (comparison.result() if hasattr(comparison, "result")
+                 else baseline_comparison(*comparison))
+        return dataclasses.replace(job, baseline=value)
+
     if simulate and "c" in free:
         # the verdict's linear screen of the friction spread, before the first round: the
         # corners unstable at the first stable start join the tuning (the worst of each
@@ -879,8 +937,9 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
                 raise
             # a later round found no design: the last one stands, with the reason
             rounds.append(TuningRound(number, None, f"no design: {exc}", ()))
-            job = _finish(axis, last, simulate, executor, progress, two_mass)
-            return dataclasses.replace(job, rounds=tuple(rounds))
+            job = _finish(axis, last, simulate, executor, progress, two_mass,
+                          given if commissioned is not None else None)
+            return attach(dataclasses.replace(job, rounds=tuple(rounds)))
         last = result
         # the linear screen of the friction's spread: a corner whose model is unstable with
         # the design is refuted before anything is simulated; one whose instability no gain
@@ -907,16 +966,106 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
                 f"spread: {text}", tuple(m.name for m in new)))
             added += new
             continue
-        job = _finish(axis, result, simulate, executor, progress, two_mass)
+        job = _finish(axis, result, simulate, executor, progress, two_mass,
+                      given if commissioned is not None else None)
         new = refuted_models(job) if simulate else ()
         new = tuple(m for m in new if m.name not in {a.name for a in added})
         if job.verified or not new or number == MAX_ROUNDS:
             rounds.append(TuningRound(number, result.design, _round_verdict(job), ()))
-            return dataclasses.replace(job, rounds=tuple(rounds))
+            return attach(dataclasses.replace(job, rounds=tuple(rounds)))
         rounds.append(TuningRound(number, result.design, _round_verdict(job),
                                   tuple(m.name for m in new)))
         added += new
     raise AssertionError("unreachable")  # pragma: no cover
+
+
+def baseline_comparison(axis: Axis, regimes, simulate: bool = True,
+                        commissioned=None) -> dict:
+    """Return the baseline designs of an axis and their claims, regime by regime.
+
+    The commissioning engineer's design (:func:`servotune.baseline.commissioning_design`) and
+    the textbook one (:func:`servotune.baseline.textbook_design`), each judged as the tuned
+    design is: per regime its linear claim (the worst compliance peak of the regime's models
+    on 1500 log-spaced points over the band, on the sampled-data model of a digital drive)
+    and, with ``simulate``, its nonlinear peak (the largest periodic response by harmonic
+    balance at the process force and three times it, the nominal friction; inf when the
+    regime's loop is unstable).
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis.
+    regimes : sequence of RegimeModel
+        The regime models of the nominal friction (as the tuning has them).
+    simulate : bool
+        Also the nonlinear peaks.
+    commissioned : BaselineDesign, optional
+        The commissioning design when it is known already.
+
+    Returns
+    -------
+    dict
+        ``commissioning`` and ``textbook``: ``design`` (the baseline's ``to_dict()``),
+        ``regimes`` (``name``, ``speed_m_per_s``, ``claimed_peak_m_per_n``,
+        ``nonlinear_peak_m_per_n``) and ``spread_unstable`` (the models of the friction
+        spread's corners unstable with the baseline; None without a spread); SI.
+    """
+    from .baseline import commissioning_design, textbook_design
+    from .closed_loop import closed_loop
+    from .frequency import peak
+    from .harmonic import ConvergenceError
+    from .plant import UnstableLoopError
+    from .simulate.contact import LuGreFriction
+    from .simulate.simulator import NonlinearAxis
+    from .verdict import FEEDING_LEVELS, harmonic_scan, verdict_spread
+
+    omega = np.geomspace(*axis.requirements.band, 1500)
+    band_hz = tuple(np.array(axis.requirements.band) * HZ_PER_RAD_S)
+    process = (axis.operation.process_force_pp if axis.operation is not None
+               and axis.operation.process_force_pp else 600.0)
+    out = {}
+    for key, make in (("commissioning", commissioning_design), ("textbook", textbook_design)):
+        b = commissioned if key == "commissioning" and commissioned is not None else make(axis)
+        rows = []
+        names = list(dict.fromkeys(m.regime for m in regimes if m.cutting))
+        for name in names:
+            models = [m for m in regimes if m.regime == name and m.cutting]
+            claim = 0.0
+            for m in models:
+                loop = closed_loop(axis.structure, b.drive, m.contact(b.c), axis.pads)
+                if not loop.is_stable():
+                    claim = math.inf
+                    break
+                claim = max(claim, peak(omega, np.abs(loop.compliance(omega)[0]))[0])
+            speed = models[0].speed or 0.0
+            nonlinear = None
+            if simulate and math.isfinite(claim):
+                drive = dataclasses.replace(b.drive, velocity_feedforward=1.0)
+                lugre = dataclasses.replace(axis.friction.lugre, sigma2=float(b.c))
+                nl = NonlinearAxis(axis.structure, drive, axis.pads, LuGreFriction(lugre))
+                try:
+                    scan = harmonic_scan(nl, speed, [process * k for k in FEEDING_LEVELS],
+                                         band_hz)
+                    nonlinear = max(h.peak for h in scan)
+                except (ConvergenceError, UnstableLoopError):
+                    nonlinear = None    # a branch harmonic balance cannot follow
+            elif simulate:
+                nonlinear = math.inf
+            rows.append({"name": name, "speed_m_per_s": speed,
+                         "claimed_peak_m_per_n": claim, "nonlinear_peak_m_per_n": nonlinear})
+        # the friction spread's corners the verdict checks a design over: their stability
+        spread_unstable = None
+        box = verdict_spread(axis)
+        if box is not None:
+            spread_unstable = []
+            for label, params in box.corners():
+                for m in regimes:
+                    corner = dataclasses.replace(m, friction=params, sample=label)
+                    if not closed_loop(axis.structure, b.drive, corner.contact(b.c),
+                                       axis.pads).is_stable():
+                        spread_unstable.append(corner.name)
+        out[key] = {"design": b.to_dict(), "regimes": rows, "spread_unstable": spread_unstable}
+    return out
 
 
 #: Rounds of tuning and verification at most: a refuted operating point becomes a model.
@@ -1119,11 +1268,36 @@ def refuted_models(job) -> tuple:
     return tuple(out)
 
 
+def _as_given(axis: Axis, problem: TuningProblem) -> dict:
+    """The axis as given (its own drive and C) in the tuning's nominal models: stable or not,
+    and with a digital drive that is not, the largest stable velocity Kp at its Ti."""
+    from .closed_loop import closed_loop
+
+    drive, c = axis.drive, axis.friction.viscous
+    unstable = [m.name for m in problem.regimes if m.sample == "nominal"
+                and not closed_loop(axis.structure, drive, m.contact(c), axis.pads).is_stable()]
+    out = {"design": {"c": c, "kv": drive.kv, "kp": drive.velocity_loop.kp,
+                      "ti": drive.velocity_loop.ti},
+           "current_loop": {"kp": drive.current_loop.kp, "ti": drive.current_loop.ti},
+           "unstable_in": unstable, "kp_limit": None}
+    if unstable and not drive.digital.is_continuous:
+        moving = problem.moving_models
+        model = problem.regimes[moving[0] if moving else 0]
+        kp_max = SampledAxis(axis.structure, drive, model.contact(c),
+                             problem.pads).largest_stable_kp(rtol=1e-3)
+        out["kp_limit"] = {"kp_max": kp_max, "ti": drive.velocity_loop.ti,
+                           "model": model.name, "kp_initial": drive.velocity_loop.kp}
+    return out
+
+
 def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress,
-            two_mass: bool) -> AxisTuning:
-    """The analyses and the verdict of a tuned design."""
+            two_mass: bool, given: Axis | None = None) -> AxisTuning:
+    """The analyses and the verdict of a tuned design (``given``: the axis as given, when the
+    tuning started from another drive)."""
     problem = result.problem
     out = {"axis": axis, "result": result, "notes": tuple(axis.defaults)}
+    if given is not None and given.drive is not None and given.friction is not None:
+        out["as_given"] = _as_given(given, problem)
     out["two_mass"] = two_mass_check(axis, result) if two_mass else None
     if problem.thrust is not None:
         out["thrust_before"] = problem.thrust.to_dict(result.initial.c)
@@ -1141,7 +1315,7 @@ def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress
                                               axis.friction.lugre.sigma2, amp, freq,
                                               axis.friction.lugre.sigma0, axis.operation)
     if (axis.drive is not None and not result.before.stable
-            and not axis.drive.digital.is_continuous):
+            and not axis.drive.digital.is_continuous and given is None):
         moving = problem.moving_models
         model = problem.regimes[moving[0] if moving else 0]
         initial = problem.drive_for(result.initial)

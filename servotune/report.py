@@ -414,7 +414,8 @@ def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
               + ("<ul>" + "".join(f"<li>{html.escape(x)}</li>" for x in lines) + "</ul>"
                  if lines else ""))
     tables = "".join(summary.html_table(t) for t in (
-        summary.inputs_table(job), summary.regimes_table(job), summary.rounds_table(job),
+        summary.inputs_table(job), summary.regimes_table(job), summary.baseline_table(job),
+        summary.rounds_table(job),
         summary.design_table(job),
         summary.thrust_table(job), summary.realisation_table(job), summary.loops_table(job)))
     two = ""

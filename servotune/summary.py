@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 from .drive import kv_to_m_per_min_per_mm
 from .units import HZ_PER_RAD_S
 
-__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "rounds_table", "loops_table",
-           "thrust_table", "realisation_table", "verdict_lines", "text", "html_table"]
+__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "rounds_table",
+           "baseline_table", "loops_table", "thrust_table", "realisation_table",
+           "verdict_lines", "text", "html_table"]
 
 
 
@@ -157,6 +158,24 @@ def design_table(job) -> Table:
         if r.start is not None and r.start != r.initial:
             notes.append(f"the tuning started from a softer velocity loop: Kp = "
                          f"{r.start.kp:.4g} N m s/rad")
+    elif r.start is not None and r.start != r.initial:
+        notes.append(f"the tuning started from C = {r.start.c:.4g} N s/m, Kv = "
+                     f"{r.start.kv:.4g} 1/s, Kp = {r.start.kp:.4g} N m s/rad, Ti = "
+                     f"{r.start.ti * 1e3:.4g} ms")
+    given = getattr(job, "as_given", None)
+    if given is not None:
+        g, ci = given["design"], given["current_loop"]
+        state = ("unstable in " + ", ".join(given["unstable_in"]) if given["unstable_in"]
+                 else "stable in every nominal model")
+        notes.append(f"the axis as given (C {g['c']:.4g} N s/m, Kv {g['kv']:.4g} 1/s, Kp "
+                     f"{g['kp']:.4g} N m s/rad, Ti {g['ti'] * 1e3:.4g} ms, current loop "
+                     f"{ci['kp']:.4g} V/A, {ci['ti'] * 1e3:.4g} ms) is {state}")
+        k = given.get("kp_limit")
+        if k is not None:
+            notes.append(f"as given, the sampled-data velocity loop of {k['model']} is "
+                         f"stable only up to Kp = {k['kp_max']:.4g} N m s/rad at Ti = "
+                         f"{k['ti'] * 1e3:.4g} ms (position loop open); the axis gives "
+                         f"{k['kp_initial']:.4g}")
     if r.active:
         notes.append("active at the optimum: " + "; ".join(r.active))
     for model, why in r.excluded:
@@ -199,6 +218,82 @@ def regimes_table(job) -> Table:
     return Table("Regimes: worst compliance peak [m/N], linear claim and nonlinear axis",
                  ("regime", "claim before", "claim after", "nonlinear before",
                   "nonlinear after", "realised", "holds"), tuple(rows), notes)
+
+
+def baseline_table(job) -> Table | None:
+    """Return the tuned design against the baselines, regime by regime, linear and nonlinear.
+
+    Parameters
+    ----------
+    job : servotune.design.AxisTuning
+        The tuning job (:func:`servotune.design.tune_axis`).
+
+    Returns
+    -------
+    Table or None
+        One row per regime: the claim (linear) and the nonlinear peak of the commissioning
+        engineer's design, the textbook's and the tuned one, and the tuned against the
+        commissioning (None without baselines).
+    """
+    base = getattr(job, "baseline", None)
+    if not base:
+        return None
+    # like with like: the nominal friction (the baselines are judged there)
+    tuned = {}
+    for mp in job.result.after.models if job.result.after is not None else ():
+        m = mp.model
+        if not m.cutting or m.sample != "nominal":
+            continue
+        peak = mp.peak_compliance if mp.stable else math.inf
+        tuned[m.regime] = (max(tuned.get(m.regime, (0.0,))[0], peak or 0.0), None)
+    if job.verdict is not None:
+        for v in job.verdict.regimes:
+            if v.name in tuned:
+                nominal = getattr(v, "nonlinear_peak_after_nominal", None)
+                tuned[v.name] = (tuned[v.name][0],
+                                 nominal if nominal is not None else v.nonlinear_peak_after)
+    com = {r["name"]: r for r in base["commissioning"]["regimes"]}
+    txt = {r["name"]: r for r in base["textbook"]["regimes"]}
+    rows = []
+    for name, (claim, nonlinear) in tuned.items():
+        c, t = com.get(name, {}), txt.get(name, {})
+
+        def change(a, b):
+            if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
+                return "-"
+            return f"{100 * (a / b - 1):+.0f} %"
+
+        rows.append((name, _f(c.get("claimed_peak_m_per_n"), "{:.3g}"),
+                     _f(c.get("nonlinear_peak_m_per_n"), "{:.3g}"),
+                     _f(t.get("claimed_peak_m_per_n"), "{:.3g}"),
+                     _f(t.get("nonlinear_peak_m_per_n"), "{:.3g}"),
+                     _f(claim, "{:.3g}"), _f(nonlinear, "{:.3g}"),
+                     change(claim, c.get("claimed_peak_m_per_n")),
+                     change(nonlinear, c.get("nonlinear_peak_m_per_n"))))
+    d = base["commissioning"]["design"]
+    notes = [f"commissioning ({d.get('rule', 'servotune.baseline')}): current PI "
+             f"{d['current_kp']:.4g} V/A, {d['current_ti'] * 1e3:.4g} ms; velocity PI "
+             f"{d['velocity_kp']:.4g} N m s/rad, {d['velocity_ti'] * 1e3:.4g} ms; Kv "
+             f"{d['kv']:.4g} 1/s; C {d['c']:.4g} N s/m"
+             + (f"; notch {d['notch']['f_hz']:.4g} Hz" if d.get("notch") else "")
+             if all(k in d for k in ("current_kp", "velocity_kp", "kv", "c")) else
+             "commissioning: servotune.baseline (technical and symmetric optimum, a notch, "
+             "Kv from the hierarchy)",
+             "textbook: Kp = J 2 pi 25 Hz, Ti = 25 ms, Kv = 25 1/s",
+             "all at the nominal friction; the baselines' nonlinear peaks by harmonic balance "
+             "at 1 and 3 x the process force, the tuned design's by the verdict"]
+    for key in ("commissioning", "textbook"):
+        spread = base[key].get("spread_unstable")
+        if spread:
+            notes.append(f"{key}: unstable at {len(spread)} corner model(s) of the friction "
+                         f"spread ({spread[0]}{' ...' if len(spread) > 1 else ''})")
+        elif spread is not None:
+            notes.append(f"{key}: stable at every corner of the friction spread")
+    notes = tuple(notes)
+    return Table("Against the baselines: worst compliance peak [m/N] per regime, linear claim "
+                 "and nonlinear",
+                 ("regime", "commissioning", "nonlinear", "textbook", "nonlinear", "tuned",
+                  "nonlinear", "tuned vs comm.", "nonlinear"), tuple(rows), notes)
 
 
 def rounds_table(job) -> Table | None:

@@ -85,6 +85,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--no-simulation", action="store_true",
                    help="skip the nonlinear verification (the design is then not called "
                         "verified; exit status 3 when the linear checks hold)")
+    p.add_argument("--no-commission", action="store_true",
+                   help="start from the axis' own drive (its current loop, filters and gains) "
+                        "instead of the commissioning design (servotune.baseline: current "
+                        "loop by the technical optimum, velocity PI by the symmetric optimum "
+                        "reduced to the Ms limit, a notch, Kv from the hierarchy)")
     p.add_argument("--spread-from", type=Path, default=None, metavar="STUDY",
                    help="results.parquet (or folder) of a friction-spread study (servotune "
                         "study): its worst samples become further friction models of every "
@@ -172,7 +177,7 @@ def run(args) -> int:
 
             job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
                             starts=args.starts, simulate=simulate, executor=pool,
-                            progress=report_sims)
+                            progress=report_sims, commission=not args.no_commission)
     interrupt.check("the tuning")
     results = job.to_dict()
     notes += list(job.result.notes)
@@ -207,6 +212,7 @@ def run(args) -> int:
     for line in checks.warnings:
         print(f"  WARNING: {line}")
     for table in (summary.inputs_table(job), summary.rounds_table(job), summary.design_table(job),
+                  summary.baseline_table(job),
                   summary.regimes_table(job), summary.thrust_table(job),
                   summary.realisation_table(job), summary.loops_table(job)):
         if table is not None:
