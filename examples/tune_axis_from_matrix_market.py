@@ -79,6 +79,7 @@ def main(axis_path=AXIS, starts=2, seed=0, figure=None, executor=None):
         "friction_n_points": int(fit.residuals.size),
         "initial_design": result["initial_design"],
         "design": result["design"],
+        "drive_fixed": result["drive_fixed"],
         "verified": result["verified"],
         "reasons": result["reasons"],
         "peak_compliance_before": result["peak_compliance_before"],

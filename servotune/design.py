@@ -26,6 +26,7 @@ from .axis import Axis
 from .blas import one_thread
 from .closed_loop import axis_compliance
 from .digital import SampledAxis
+from .drive import PIController
 from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
@@ -608,6 +609,7 @@ class AxisTuning:
             "c_realisation": [x.to_dict() for x in self.c_realisation],
             "drive_sampling": (None if r.problem.drive is None
                                else r.problem.drive.digital.to_dict()),
+            "drive_fixed": None if r.problem.drive is None else _fixed_parts(r.problem.drive),
             "process": self.process,
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
             "active_constraints": list(r.active),
@@ -789,6 +791,13 @@ def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
                         checks=checks)
 
 
+def _fixed_parts(drive) -> dict:
+    """The drive's parts the tuning keeps (the current loop and the set-point filters), SI."""
+    return {"current_kp": drive.current_loop.kp, "current_ti": drive.current_loop.ti,
+            "notch": None if drive.notch is None else dataclasses.asdict(drive.notch),
+            "lowpass": None if drive.lowpass is None else dataclasses.asdict(drive.lowpass)}
+
+
 def _reference_contact(problem, design):
     """The contact of the problem's reference model (the first moving one) for a design."""
     moving = problem.moving_models
@@ -871,11 +880,24 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     given = axis
     commissioned, commission_notes = None, ()
     if (commission and axis.drive is not None and axis.friction is not None
-            and axis.operation is not None):
+            and axis.operation is not None and ("kp" in free or "ti" in free)):
         from .baseline import commissioning_design
 
-        commissioned = commissioning_design(axis)
+        try:
+            commissioned = commissioning_design(axis)
+        except ValueError as exc:
+            commission_notes = (f"no commissioning start ({str(exc).splitlines()[0][:200]}): "
+                                "the tuning starts from the axis' own drive",)
+            axis = dataclasses.replace(axis, defaults=tuple(axis.defaults) + commission_notes)
+    if commissioned is not None:
         d, own = commissioned.drive, axis.drive
+        # the variables kept fixed keep the axis' own values
+        d = dataclasses.replace(
+            d, kv=d.kv if "kv" in free else own.kv,
+            velocity_loop=PIController(d.velocity_loop.kp if "kp" in free else
+                                       own.velocity_loop.kp,
+                                       d.velocity_loop.ti if "ti" in free else
+                                       own.velocity_loop.ti))
         commission_notes = (
             "the tuning starts from the commissioning design (servotune.baseline): its current "
             f"loop {d.current_loop.kp:.4g} V/A, {d.current_loop.ti * 1e3:.4g} ms (technical "
@@ -888,8 +910,6 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
             "(commission=False, --no-commission: the axis' own)",)
         axis = dataclasses.replace(axis, drive=d, defaults=tuple(axis.defaults)
                                    + commission_notes)
-        if c0 is None:
-            c0 = commissioned.c
     base = tuning_problem(axis, free, chatter_weight, bounds, c0)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
@@ -910,7 +930,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
                  else baseline_comparison(*comparison))
         return dataclasses.replace(job, baseline=value)
 
-    if simulate and "c" in free:
+    if "c" in free:
         # the verdict's linear screen of the friction spread, before the first round: the
         # corners unstable at the first stable start join the tuning (the worst of each
         # regime), with the least damping that holds them as the floor of C
@@ -945,7 +965,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         # the design is refuted before anything is simulated; one whose instability no gain
         # reaches (a pad mode the friction's falling slope destabilises) needs damping: the
         # least C that holds it becomes the lower bound of C in the next round
-        new = spread_screen(axis, result.problem, result.design) if simulate else ()
+        new = spread_screen(axis, result.problem, result.design)
         new = tuple(m for m in new if m.name not in {a.name for a in added})
         if new and number < MAX_ROUNDS:
             needs = []

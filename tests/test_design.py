@@ -46,47 +46,39 @@ def test_tune_keeps_a_file_that_is_not_its_own(tmp_path, capsys):
     assert (folder / "notes.txt").read_text() == "mine"
 
 
-def test_the_bundled_axis_is_judged_regime_by_regime_over_its_friction_variation(bundled_job):
+def test_the_bundled_axis_is_verified_regime_by_regime_over_its_friction_variation(bundled_job):
     # make demo's job: the paper's gains are unstable with the digital drive (the paper's
-    # model is continuous); the tuned design holds every requirement in every regime model of
-    # the nominal friction and the nonlinear axis stays within 30 % of each regime's claim
-    # there; over the paper's measured variation of the friction (the corners of [friction]
-    # variation) the feeding regime at 6.67 mm/s loses its stability where Fs and sigma0 are
-    # both high, which the verdict names (tests/test_verdict_spread.py confirms it in time)
+    # model is continuous); the tuning starts from the commissioning design; the paper's
+    # measured variation of the friction has corners (Fs and sigma0 both high) whose feeding
+    # model at 6.67 mm/s loses its stability below C = 1.14e4 N s/m, which the screen before
+    # the first round finds and the tuning then holds (C >= 1.1 x that); the design holds
+    # every requirement in every regime model and the nonlinear axis stays within 30 % of
+    # each regime's claim at every corner
     from servotune.digital import SampledAxis
     from servotune.regimes import RegimeModel
 
     axis, job = bundled_job
     out = job.to_dict()
-    assert out["stable_before"] is False
     req = axis.requirements
     assert out["ms_velocity"] <= req.ms_limit("velocity") * 1.005
     assert out["ms_position"] <= req.ms_limit("position") * 1.005
+    assert job.verified, out["reasons"]
     for regime in out["regimes"]:
-        assert regime["nonlinear_peak_after_nominal_m_per_n"] <= (
-            1.3 * regime["claimed_peak_m_per_n"])
+        assert regime["holds"], regime["reason"]
+        assert regime["nonlinear_peak_after_m_per_n"] <= 1.3 * regime["claimed_peak_m_per_n"]
     assert out["thrust"]["fits"] is True
-    assert not job.verified and "feeding 6.67 mm/s" in " ".join(out["reasons"])
-    assert "fs +258 N" in " ".join(out["reasons"])
+    assert out["as_given"]["unstable_in"]          # the axis as given: Kp 35 too high
     # the corner by hand: the sliding model at Fs + 258 N, sigma0 + 1.17e9 N/m is unstable
+    # with the commissioning design's C (5578 N s/m) and stable with the tuned design
     p = axis.friction.lugre
     corner = dataclasses.replace(p, fs=p.fs + 258.0, sigma0=p.sigma0 + 1.17e9)
     model = RegimeModel("feeding 6.67 mm/s", "sliding", corner, speed=6.67e-3)
-    drive = job.result.problem.drive_for(job.design)
-    assert not SampledAxis(axis.structure, drive, model.contact(job.design.c),
-                           axis.pads).is_stable()
-    # second method: python-control's own frequency response of the tuned loops, as the
-    # discrete state spaces of the sampled-data loops (the velocity loop at the speed
-    # controller's rate, the position loop lifted to its own: independent of the algebra the
-    # report uses), meets the Ms limits, and its sensitivity peak is the one the report gives
-    drive = job.result.problem.drive_for(job.design)
-    contact = job.loops_after.contact
-    for loop in ("velocity", "position"):
-        lt = _discrete_loop(axis, drive, contact, loop)
-        omega = 2 * np.pi * np.geomspace(0.1, 0.499 / lt.dt, 4000)
-        ms = 1.0 / np.abs(1.0 + control.frequency_response(lt, omega).complex.ravel()).min()
-        assert ms <= req.ms_limit(loop) * 1.01
-        assert out["loops_after"][f"{loop}_loop"]["ms"] == pytest.approx(ms, rel=2e-3)
+    problem = job.result.problem
+    start = dataclasses.replace(job.design, c=axis.friction.viscous)
+    assert not SampledAxis(axis.structure, problem.drive_for(start),
+                           model.contact(start.c), axis.pads).is_stable()
+    assert SampledAxis(axis.structure, problem.drive_for(job.design),
+                       model.contact(job.design.c), axis.pads).is_stable()
 
 
 def test_several_modes_ask_for_different_damping():

@@ -218,10 +218,16 @@ def test_tune_axis_from_matrix_market(generate):
     axis = st.load_axis(example.AXIS)
     omega = np.geomspace(*r["band"], 20001)
     peaks = {}
+    fixed = r["drive_fixed"]   # the current loop and filters the tuning kept (commissioned)
+    notch = None if fixed["notch"] is None else st.drive.NotchFilter(**fixed["notch"])
+    lowpass = None if fixed["lowpass"] is None else st.drive.LowPassFilter(**fixed["lowpass"])
     for key in ("initial_design", "design"):
         d = r[key]
         drive = dataclasses.replace(axis.drive, kv=d["kv"],
-                                    velocity_loop=st.PIController(d["kp"], d["ti"]))
+                                    velocity_loop=st.PIController(d["kp"], d["ti"]),
+                                    current_loop=st.PIController(fixed["current_kp"],
+                                                                 fixed["current_ti"]),
+                                    notch=notch, lowpass=lowpass)
         worst = 0.0
         for model in axis_regimes(axis, r["initial_design"]["c"]):
             if not model.cutting:

@@ -1,9 +1,9 @@
 """Solving the tuning problem: the stages, each a function with a typed result.
 
-1. :func:`stable_starts`: the initial design if every regime model is stable with it, else
-   the initial design with a softer velocity loop, else (a model no softer loop stabilises)
-   with more guide-way damping C; then seeded log-uniform draws within the bounds that keep
-   every model stable. A model that no candidate stabilises (e.g. feeding
+1. :func:`stable_starts`: the given first designs that keep every model stable, the initial
+   design if every regime model is stable with it, else the initial design with a softer
+   velocity loop; then seeded log-uniform draws within the bounds that keep every model
+   stable. A model that no candidate stabilises (e.g. feeding
    below the Stribeck speed, where the friction slope is negative) is excluded from the
    optimisation and reported.
 2. The starts solved in turn on the initial grid, until two reach the same stable optimum;
@@ -60,8 +60,6 @@ __all__ = ["TuningResult", "TuningStatistics", "Prediction", "StartSet", "Starts
 
 #: Softer velocity loops tried when the initial design leaves a model unstable.
 SOFTENING = (0.7, 0.5, 0.35, 0.25, 0.18, 0.125, 0.09)
-#: Factors on C tried when no softer loop stabilises every model.
-DAMPING = (2.0, 4.0, 8.0, 16.0, 32.0)
 #: Points of the fine grids on which the exchange looks for the worst frequencies (each found
 #: one is then placed by a parabola and evaluated exactly).
 FINE_POINTS = 2500
@@ -324,16 +322,6 @@ def stable_starts(problem: TuningProblem, starts: int, seed: int = 0,
             d = dataclasses.replace(x0, kp=max(x0.kp * f, lo))
             candidates.append((d, model_stability(problem, d)))
             if all(candidates[-1][1]):
-                break
-    if not all(np.any([s for _, s in candidates], axis=0)) and "c" in problem.free:
-        # a model no softer loop stabilises (a sliding contact whose friction falls with
-        # speed): more viscous damping, on the design that keeps the most models stable
-        base = max(candidates, key=lambda ds: sum(ds[1]))[0]
-        hi = problem.bounds["c"][1]
-        for f in DAMPING:
-            d = dataclasses.replace(base, c=min(max(base.c, 1.0) * f, hi))
-            candidates.append((d, model_stability(problem, d)))
-            if all(candidates[-1][1]) or d.c >= hi:
                 break
     rng = np.random.default_rng(seed)
     max_draws = 20 * max(starts, 1) if max_draws is None else max_draws
