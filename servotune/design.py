@@ -937,7 +937,9 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         added, c_floor, note = _prescreen(axis, base)
         if note:
             rounds.append(TuningRound(0, None, note, tuple(m.name for m in added)))
+    hopeless = set()      # corners no damping the drive can carry holds
     for number in range(1, MAX_ROUNDS + 1):
+        screen_note = ""
         problem = base
         if c_floor is not None:
             hi = base.bounds["c"][1]
@@ -976,22 +978,34 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
                     if c_min is not None and c_min > result.design.c:
                         needs.append((m, c_min))
             text = "; ".join(f"{m.name} is unstable" for m in new)
-            if needs:
-                c_need = max(c for _, c in needs)
+            c_max = (result.problem.thrust.c_max() if result.problem.thrust is not None
+                     else math.inf)
+            c_need = max((c for _, c in needs), default=None)
+            if c_need is None or C_FLOOR_MARGIN * c_need > c_max:
+                # no damping the drive can carry holds it: no further round; the verdict
+                # names the corner
+                limit = ("no C within the bounds holds it" if c_need is None else
+                         f"it needs C >= {c_need:.4g} N s/m, the thrust budget allows "
+                         f"{c_max:.4g} N s/m")
+                screen_note = (f"the linear screen of the friction spread: {text} ({limit}): "
+                               "no further round")
+                hopeless |= {m.name for m in new}
+            else:
                 c_floor = max(c_floor or 0.0, C_FLOOR_MARGIN * c_need)
                 text += (f" (with these gains it needs C >= {c_need:.4g} N s/m: the next "
                          f"round keeps C >= {c_floor:.4g} N s/m)")
-            rounds.append(TuningRound(
-                number, result.design, "not verified by the linear screen of the friction "
-                f"spread: {text}", tuple(m.name for m in new)))
-            added += new
-            continue
+                rounds.append(TuningRound(
+                    number, result.design, "not verified by the linear screen of the "
+                    f"friction spread: {text}", tuple(m.name for m in new)))
+                added += new
+                continue
         job = _finish(axis, result, simulate, executor, progress, two_mass,
                       given if commissioned is not None else None)
         new = refuted_models(job) if simulate else ()
-        new = tuple(m for m in new if m.name not in {a.name for a in added})
+        new = tuple(m for m in new if m.name not in {a.name for a in added} | hopeless)
         if job.verified or not new or number == MAX_ROUNDS:
-            rounds.append(TuningRound(number, result.design, _round_verdict(job), ()))
+            verdict = _round_verdict(job) + (f"; {screen_note}" if screen_note else "")
+            rounds.append(TuningRound(number, result.design, verdict, ()))
             return attach(dataclasses.replace(job, rounds=tuple(rounds)))
         rounds.append(TuningRound(number, result.design, _round_verdict(job),
                                   tuple(m.name for m in new)))
@@ -1203,12 +1217,23 @@ def _prescreen(axis: Axis, problem: TuningProblem):
     models = tuple(m for m, _ in worst.values())
     needs = [c for _, c in worst.values() if c is not None]
     c_floor = C_FLOOR_MARGIN * max(needs) if needs else None
-    text = ("the linear screen of the friction spread at the first stable start: "
-            + "; ".join(f"{m.name} is unstable" for m in models)
-            + (f" (it needs C >= {max(needs):.4g} N s/m: the tuning keeps C >= "
-               f"{c_floor:.4g} N s/m and includes these models)" if needs
-               else " (no C within its bounds holds it: the tuning includes these models)"))
-    if c_floor is not None and c_floor <= problem.bounds["c"][0]:
+    head = ("the linear screen of the friction spread at the first stable start: "
+            + "; ".join(f"{m.name} is unstable" for m in models))
+    c_max = problem.thrust.c_max() if problem.thrust is not None else math.inf
+    if not needs or c_floor > c_max:
+        # no damping the drive can carry holds the corner: tuned for the others, the verdict
+        # then names it, and what would change it
+        need = (f"it needs C >= {max(needs):.4g} N s/m" if needs else
+                f"no C up to {hi:.4g} N s/m holds it")
+        limit = (f", but the thrust budget allows at most {c_max:.4g} N s/m "
+                 f"({problem.thrust.c_max_case()})" if math.isfinite(c_max) else "")
+        return (), None, (f"{head} ({need}{limit}): no design holds these corners; the levers: "
+                          "a stronger motor or a lower rapid speed (more damping the thrust "
+                          "carries), a damper that acts only while feeding, a feed above the "
+                          "Stribeck speed, or a friction known to a narrower spread")
+    text = (f"{head} (it needs C >= {max(needs):.4g} N s/m: the tuning keeps C >= "
+            f"{c_floor:.4g} N s/m and includes these models)")
+    if c_floor <= problem.bounds["c"][0]:
         c_floor = None
     return models, c_floor, text
 
