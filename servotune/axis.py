@@ -167,6 +167,10 @@ class Cutting:
         return tuple(self.feed_per_tooth * self.setup.teeth * n / 60.0 for n in self.speed_rpm)
 
 
+#: Free names beside the bounded variables: the tuned current set-point notch.
+FREE_EXTRA = ("notch",)
+
+
 @dataclass(frozen=True)
 class TuningSettings:
     """``[tuning]``: which design variables are free, their bounds (SI) and the chatter weight.
@@ -185,13 +189,13 @@ class TuningSettings:
     Raises
     ------
     ValueError
-        Free names that are not distinct names among c, kv, kp, ti; bounds that are not
+        Free names that are not distinct names among c, kv, kp, ti, notch; bounds that are not
         0 < low < high; a chatter weight outside [0, 1]; a spread or samples that
         :func:`servotune.regimes.friction_samples` refuses; a variation of another parameter
         or not finite and > 0.
     """
 
-    free: tuple[str, ...] = ("c", "kv", "kp", "ti")
+    free: tuple[str, ...] = ("c", "kv", "kp", "ti", "notch")
     bounds: Mapping = field(default_factory=lambda: MappingProxyType({}))
     chatter_weight: float = 0.0
     friction_spread: Mapping = field(default_factory=lambda: MappingProxyType({}))
@@ -201,9 +205,10 @@ class TuningSettings:
     def __post_init__(self) -> None:
         names = ("c", "kv", "kp", "ti")
         free = (self.free,) if isinstance(self.free, str) else tuple(self.free)
-        if not free or len(set(free)) != len(free) or not set(free) <= set(names):
-            raise ValueError(f"TuningSettings.free must be distinct names among {names}, got "
-                             f"{self.free!r}")
+        if (not free or len(set(free)) != len(free)
+                or not set(free) <= {*names, *FREE_EXTRA}):
+            raise ValueError("TuningSettings.free must be distinct names among "
+                             f"{(*names, *FREE_EXTRA)}, got {self.free!r}")
         object.__setattr__(self, "free", free)
         bounds = {}
         for key, pair in dict(self.bounds).items():
@@ -819,8 +824,7 @@ def _drive(data, structure, file, defaults) -> Drive | None:
         _check_dofs(structure, ["encoder.x"], file, "[drive] encoder = 'linear'")
     try:
         lowpass = (LowPassFilter(filters["lowpass_hz"]) if "lowpass_hz" in filters else None)
-        notch = (NotchFilter(filters["notch_hz"], filters.get("notch_width", 0.5),
-                             filters.get("notch_depth", 0.1)) if "notch_hz" in filters else None)
+        notches = _notches(filters, file)
         limits = _limits(motor, file, defaults)
         sampling = _sampling(table, file, defaults)
         return Drive(
@@ -846,11 +850,43 @@ def _drive(data, structure, file, defaults) -> Drive | None:
                                          positive=False),
             torque_feedforward_inertia=_number(feedforward, "torque_inertia", file,
                                                "drive.feedforward", 0.0, positive=False),
-            lowpass=lowpass, notch=notch, sampling=sampling, limits=limits)
+            lowpass=lowpass, notches=notches, sampling=sampling, limits=limits)
     except AxisFormatError:
         raise
     except ValueError as exc:
         raise _err(file, "[drive]", str(exc), "fix the value") from None
+
+
+def _notches(filters: dict, file) -> tuple:
+    """The current set-point notches of ``[drive.filters]``: ``notch_hz``, ``notch_width`` and
+    ``notch_depth`` each a number (one notch) or a list (one entry per notch, the same
+    length); width 0.5 and depth 0.1 when absent."""
+    if "notch_hz" not in filters:
+        extra = [k for k in ("notch_width", "notch_depth") if k in filters]
+        if extra:
+            raise _err(file, "[drive.filters]", f"{extra} without notch_hz",
+                       "give the notch frequency notch_hz [Hz] (or remove them)")
+        return ()
+    values = {}
+    for key, default in (("notch_hz", None), ("notch_width", 0.5), ("notch_depth", 0.1)):
+        value = filters.get(key, default)
+        values[key] = value if isinstance(value, list) else [value]
+    n = len(values["notch_hz"])
+    for key in ("notch_width", "notch_depth"):
+        if key not in filters:
+            values[key] = values[key] * n
+        elif len(values[key]) != n:
+            raise _err(file, f"[drive.filters] {key}", f"has {len(values[key])} entries for "
+                       f"{n} notch frequencies", "give one value per notch_hz entry")
+    out = []
+    for i in range(n):
+        row = {k: v[i] for k, v in values.items()}
+        where = "drive.filters" + (f" (notch {i + 1})" if n > 1 else "")
+        out.append(NotchFilter(_number(row, "notch_hz", file, where, unit="Hz"),
+                               _number(row, "notch_width", file, where, unit="-"),
+                               _number(row, "notch_depth", file, where, positive=False,
+                                       low=0.0, high=1.0, unit="-")))
+    return tuple(out)
 
 
 _TORQUE_SPEED_KEYS = ("speed_rpm", "peak", "continuous")
@@ -1199,11 +1235,13 @@ def _tuning(data, file) -> TuningSettings:
                                               *names))
     if table is None:
         return TuningSettings()
-    free = table.get("free", list(names))
-    if (not isinstance(free, list) or not free or not all(v in names for v in free)
+    free = table.get("free", list(TuningSettings.free))
+    if (not isinstance(free, list) or not free
+            or not all(v in (*names, *FREE_EXTRA) for v in free)
             or len(set(free)) != len(free)):
         raise _err(file, "[tuning] free", f"got {free!r}",
-                   f"give a list of distinct names among {list(names)}")
+                   f"give a list of distinct names among {[*names, *FREE_EXTRA]} (notch: the "
+                   "current set-point notch's frequency, width and depth)")
     bounds = {}
     for key in names:
         if key in table:

@@ -513,7 +513,7 @@ class BaselineDesign:
             "kv_m_per_min_per_mm": kv_to_m_per_min_per_mm(d.kv),
             "velocity_kp": d.velocity_loop.kp, "velocity_ti": d.velocity_loop.ti,
             "current_kp": d.current_loop.kp, "current_ti": d.current_loop.ti,
-            "notch": None if d.notch is None else dataclasses.asdict(d.notch),
+            "notches": [dataclasses.asdict(n) for n in d.notches],
             "lowpass": None if d.lowpass is None else dataclasses.asdict(d.lowpass),
             "inertia": self.inertia, "measured_in": self.measured_in,
             "velocity_loop": None if self.velocity is None else self.velocity.to_dict(),
@@ -607,7 +607,7 @@ def _current_stage(drive: Drive, rules: Sampling, steps: list) -> tuple[Drive, f
     """Rule 1: the technical optimum; the drive with it (no notch) and T_sigma_i."""
     ts_i = current_small_time_constant(rules)
     current = technical_optimum(drive.motor, ts_i)
-    base = dataclasses.replace(drive, current_loop=current, notch=None)
+    base = dataclasses.replace(drive, current_loop=current, notches=())
     m = drive.motor
     steps.append(
         f"current loop, technical optimum: T_sigma_i = (d + 1/2) T = ({rules.computation_delay}"
@@ -630,7 +630,8 @@ def _velocity_stage(setting: _Setting, base: Drive, inertia: float, ts_v: float,
     def search(notch):
         def evaluate(x):
             pi = symmetric_optimum(inertia, ts_v, x)
-            trial = dataclasses.replace(base, velocity_loop=pi, notch=notch)
+            trial = dataclasses.replace(base, velocity_loop=pi,
+                                        notches=() if notch is None else (notch,))
             an = _analysis(_model(setting, trial), "velocity")
             ok, text = _verdict(an, setting.ms_velocity, "velocity loop")
             return ok, (trial, an), f"  a = {x:.4g}: {_fmt_pi(pi)}: {text}"
@@ -766,7 +767,7 @@ def commissioning_design(axis: Axis, drive: Drive | None = None,
                                             overshoot_max, steps)
     steps.append(f"result: Kv = {final.kv:.4g} 1/s ({kv_to_m_per_min_per_mm(final.kv):.3g} "
                  f"(m/min)/mm), {_fmt_pi(final.velocity_loop)}, notch "
-                 + (f"{final.notch.f_hz:.1f} Hz" if final.notch else "none")
+                 + (", ".join(f"{n.f_hz:.1f} Hz" for n in final.notches) or "none")
                  + f"; C = {setting.c:.5g} N s/m (the guide ways' own)")
     if final.kv < axis.requirements.kv_min:
         steps.append(f"note: Kv = {final.kv:.4g} 1/s is below the required kv_min = "

@@ -31,6 +31,7 @@ from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
 from .tuning import (
+    NOTCH_VARIABLES,
     ChatterTarget,
     Design,
     NoStableStartError,
@@ -39,6 +40,7 @@ from .tuning import (
     TuningProblem,
     TuningResult,
     TuningStatistics,
+    expand_free,
     tune,
 )
 from .units import HZ_PER_RAD_S
@@ -63,7 +65,19 @@ __all__ = [
     "axis_regimes",
     "process_amplitude",
     "check_design",
+    "start_notch",
+    "with_drive_fixed",
 ]
+
+#: A notch starts only where the velocity loop's sensitivity peaks at least this high above
+#: NOTCH_ABOVE times its bandwidth (below, the loop's own crossover sets Ms: no resonance to
+#: notch).
+NOTCH_MS_MIN = 1.1
+NOTCH_ABOVE = 3.0
+#: The tuned notch's start: width (2 zeta_p) and depth (1: no notch yet, the start design is
+#: the one given; the optimiser deepens it where that pays).
+NOTCH_START_WIDTH = 0.3
+NOTCH_START_DEPTH = 1.0
 
 
 #: Default search bounds (SI); ``kp`` is relative to the initial value. Ti stays at or below
@@ -159,7 +173,7 @@ def axis_regimes(axis: Axis, c: float | None = None) -> tuple[RegimeModel, ...]:
 
 def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
                    bounds: dict | None = None, c0: float | None = None,
-                   regimes=None) -> TuningProblem:
+                   regimes=None, notch=None) -> TuningProblem:
     """Return the tuning problem of an axis.
 
     The axis' requirements are kept, except the objective band of a two-mass axis without a
@@ -172,8 +186,8 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     axis : Axis
         The axis description (needs ``[friction]``).
     free : sequence of str
-        Free variables among c, kv, kp, ti (those needing a drive are dropped when the axis has
-        none).
+        Free variables among c, kv, kp, ti and notch (those needing a drive are dropped when
+        the axis has none; the notch's when there is no ``notch`` to tune).
     chatter_weight : float in [0, 1]
         Weight of the chatter limit (initial b_crit / b_crit) against the compliance peak
         (peak / initial peak); needs ``[cutting]``.
@@ -184,6 +198,9 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
         when outside them.
     regimes : sequence of RegimeModel, optional
         Default :func:`axis_regimes` at ``c0``.
+    notch : NotchFilter, optional
+        The tuned current set-point notch (its start, e.g. :func:`start_notch`), after the
+        drive's own set-point filters.
 
     Returns
     -------
@@ -205,7 +222,9 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     if axis.friction is None:
         axis.pads  # the clear error naming [friction]  # noqa: B018
     drive = axis.drive
-    free = tuple(v for v in free if drive is not None or v == "c")
+    notch = notch if drive is not None else None
+    free = tuple(v for v in expand_free(free) if (drive is not None or v == "c")
+                 and (notch is not None or v not in NOTCH_VARIABLES))
     c0 = axis.friction.viscous if c0 is None else c0
     chatter = None
     if axis.cutting is not None:
@@ -243,7 +262,120 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     return TuningProblem(axis.structure, axis.pads, c=c0, drive=drive, free=free,
                          bounds=problem_bounds, requirements=requirements, chatter=chatter,
                          weights=(1.0 - chatter_weight, chatter_weight), regimes=models,
-                         thrust=budget)
+                         thrust=budget, notch=notch)
+
+
+def start_notch(problem: TuningProblem, n_points: int = 3000):
+    """Return where the tuned current set-point notch starts, and why.
+
+    The velocity loop of the problem's initial design, in every model in which the axis moves
+    (the port model; a digital drive as its sampled-data loop): its bandwidth w_b (the first
+    frequency where |T_v| falls below 1/sqrt 2) and its sensitivity |S_v| = 1/|1 + L_v| above
+    :data:`NOTCH_ABOVE` w_b, up to 0.45 times the current controller's sample rate. Where the
+    largest of these peaks is at least :data:`NOTCH_MS_MIN`, a resonance of the velocity-loop
+    plant lifts the loop there (what a drive engineer notches: Ellis 2012, ch. 16); the notch
+    starts on it (the largest |L_v| within 30 % of the sensitivity's peak), width
+    :data:`NOTCH_START_WIDTH` and depth :data:`NOTCH_START_DEPTH` (no notch yet: the start is
+    the design given).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        A problem with a drive.
+    n_points : int
+        Frequencies of the log-spaced loop grid.
+
+    Returns
+    -------
+    (NotchFilter or None, str)
+        The start notch (None: nothing to notch) and a sentence saying why.
+    """
+    from .drive import NotchFilter
+    from .tuning.ports import ResponseModel, grid
+
+    drive = problem.drive
+    if drive is None:
+        return None, "no drive"
+    lo, hi = problem.requirements.loop_band
+    if not drive.digital.is_continuous:
+        hi = min(hi, 0.45 * 2.0 * math.pi / drive.digital.current_period)
+    omega = grid(lo, hi, n_points)
+    x0 = problem.initial_design()
+    lv = ResponseModel(problem, omega, x0)(x0)["loop_velocity"]
+    models = problem.moving_models or tuple(range(len(problem.regimes)))
+    best = None
+    for m in models:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.abs(lv[m] / (1.0 + lv[m]))
+            sens = 1.0 / np.abs(1.0 + lv[m])
+        below = np.nonzero(t < math.sqrt(0.5))[0]
+        if not below.size or not np.all(np.isfinite(sens)):
+            continue
+        w_b = omega[below[0]]
+        above = omega > NOTCH_ABOVE * w_b
+        if not above.any():
+            continue
+        i = int(np.argmax(np.where(above, sens, 0.0)))
+        # the resonance that lifts the loop there: the largest |L_v| within 30 % of it
+        near = above & (omega > omega[i] / 1.3) & (omega < omega[i] * 1.3)
+        j = int(np.argmax(np.where(near, np.abs(lv[m]), 0.0)))
+        if best is None or sens[i] > best[0]:
+            best = (float(sens[i]), float(omega[j]), float(w_b), problem.regimes[m].name)
+    if best is None:
+        return None, "no velocity-loop bandwidth found in the loop band: no notch tuned"
+    ms, w, w_b, name = best
+    if ms < NOTCH_MS_MIN:
+        return None, (f"the velocity loop's sensitivity stays below {NOTCH_MS_MIN:g} above "
+                      f"{NOTCH_ABOVE:g} x its bandwidth ({ms:.3g} at most): no resonance to "
+                      "notch, no notch tuned")
+    f_hz = w * HZ_PER_RAD_S
+    return NotchFilter(f_hz, NOTCH_START_WIDTH, NOTCH_START_DEPTH), (
+        f"the tuned current set-point notch starts at {f_hz:.1f} Hz, the resonance that lifts "
+        f"the velocity loop's sensitivity to {ms:.3g} ({name}; bandwidth "
+        f"{w_b * HZ_PER_RAD_S:.1f} Hz), "
+        f"width {NOTCH_START_WIDTH:g}, depth {NOTCH_START_DEPTH:g} (not yet a notch: the "
+        "tuning deepens it where that pays)")
+
+
+def with_drive_fixed(axis: Axis, fixed: dict | None, where="results.json") -> Axis:
+    """Return the axis with the drive parts a tuning kept (``drive_fixed`` of its results):
+    the current loop and the set-point filters it was tuned with (the commissioning design's,
+    when the tuning started there).
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis the results were tuned on.
+    fixed : dict or None
+        ``current_kp`` [V/A], ``current_ti`` [s], ``lowpass`` ({f_hz, damping_ratio} or None)
+        and ``notches`` (list of {f_hz, width, depth}); None leaves the axis as it is.
+    where : str
+        Where ``fixed`` comes from (for the error message).
+
+    Returns
+    -------
+    Axis
+
+    Raises
+    ------
+    ValueError
+        A part that is missing or not valid (the message names it).
+    """
+    from .drive import LowPassFilter, NotchFilter
+
+    if fixed is None or axis.drive is None:
+        return axis
+    try:
+        lowpass = None if fixed.get("lowpass") is None else LowPassFilter(**fixed["lowpass"])
+        notches = tuple(NotchFilter(**n) for n in fixed.get("notches") or ())
+        current = PIController(float(fixed["current_kp"]), float(fixed["current_ti"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: drive_fixed is not valid ({exc}); it must hold "
+                         "current_kp [V/A], current_ti [s], lowpass and notches as servotune "
+                         "tune writes them") from None
+    drive = dataclasses.replace(axis.drive, current_loop=current, lowpass=lowpass,
+                                notches=notches)
+    return dataclasses.replace(axis, drive=drive)
 
 
 def _two_mass_system(axis: Axis) -> twomass.TwoMassSystem | None:
@@ -723,7 +855,7 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     from .simulate.verify import design_setup, verify_design
 
     setup = design_setup(axis_setup(axis), c=design.c, kv=design.kv, kp=design.kp,
-                         ti=design.ti)
+                         ti=design.ti, notch=design.notch)
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
 
 
@@ -773,8 +905,10 @@ def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
         axis = dataclasses.replace(axis, operation=dataclasses.replace(
             axis.operation, feed_speeds=tuple(float(v) for v in feed_speeds)))
     t0 = time.perf_counter()
-    problem = tuning_problem(axis, free=("c", "kv", "kp", "ti") if axis.drive else ("c",))
-    x0 = problem.initial_design()
+    problem = tuning_problem(axis, free=("c", "kv", "kp", "ti") if axis.drive else ("c",),
+                             notch=design.notch)
+    x0 = dataclasses.replace(problem.initial_design(), **(
+        {} if design.notch is None else {"notch_depth": 1.0}))  # the axis' own: no notch
     before = verify(problem, x0)
     after = verify(problem, design)
     current_bw = (current_loop_bandwidth(problem.drive) if problem.drive is not None else None)
@@ -794,7 +928,7 @@ def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
 def _fixed_parts(drive) -> dict:
     """The drive's parts the tuning keeps (the current loop and the set-point filters), SI."""
     return {"current_kp": drive.current_loop.kp, "current_ti": drive.current_loop.ti,
-            "notch": None if drive.notch is None else dataclasses.asdict(drive.notch),
+            "notches": [dataclasses.asdict(n) for n in drive.notches],
             "lowpass": None if drive.lowpass is None else dataclasses.asdict(drive.lowpass)}
 
 
@@ -874,7 +1008,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     servotune.tuning.verify.verify : the dense linear check of a design.
     """
     settings = axis.tuning
-    free = settings.free if free is None else free
+    free = expand_free(settings.free if free is None else free)
     chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight
     bounds = {**settings.bounds, **(bounds or {})}
     given = axis
@@ -903,7 +1037,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
             f"loop {d.current_loop.kp:.4g} V/A, {d.current_loop.ti * 1e3:.4g} ms (technical "
             f"optimum; the axis gives {own.current_loop.kp:.4g} V/A, "
             f"{own.current_loop.ti * 1e3:.4g} ms)"
-            + (f", its notch at {d.notch.f_hz:.4g} Hz" if d.notch is not None else "")
+            + "".join(f", its notch at {n.f_hz:.4g} Hz" for n in d.notches)
             + (f", its low-pass at {d.lowpass.f_hz:.4g} Hz" if d.lowpass is not None else "")
             + f" and its gains (Kv {d.kv:.4g} 1/s, Kp {d.velocity_loop.kp:.4g} N m s/rad, "
             f"Ti {d.velocity_loop.ti * 1e3:.4g} ms) as its start: the 'before' of the tables "
@@ -911,6 +1045,13 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         axis = dataclasses.replace(axis, drive=d, defaults=tuple(axis.defaults)
                                    + commission_notes)
     base = tuning_problem(axis, free, chatter_weight, bounds, c0)
+    notch = None
+    if base.drive is not None and set(free) & set(NOTCH_VARIABLES):
+        # the tuned notch starts on the resonance that lifts the start's velocity loop
+        notch, why = start_notch(base)
+        axis = dataclasses.replace(axis, defaults=(*axis.defaults, why))
+        if notch is not None:
+            base = dataclasses.replace(base, notch=notch, free=free)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
         tolerance = 1e-10 if two_mass else 1e-6
@@ -944,7 +1085,8 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         if c_floor is not None:
             hi = base.bounds["c"][1]
             problem = tuning_problem(axis, free, chatter_weight,
-                                     {**bounds, "c": (c_floor, hi)}, max(c_floor, base.c))
+                                     {**bounds, "c": (c_floor, hi)}, max(c_floor, base.c),
+                                     notch=notch)
         if added:
             problem = dataclasses.replace(problem, regimes=problem.regimes + added)
         try:

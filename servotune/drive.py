@@ -513,8 +513,8 @@ class NotchFilter:
         object.__setattr__(self, "f_hz", positive("NotchFilter", "f_hz", self.f_hz, "Hz"))
         object.__setattr__(self, "width", positive("NotchFilter", "width", self.width))
         object.__setattr__(self, "depth", fraction(
-            "NotchFilter", "depth", self.depth,
-            hint="it is the gain at the notch frequency (0 for a full notch)"))
+            "NotchFilter", "depth", self.depth, closed=True,
+            hint="it is the gain at the notch frequency (0 for a full notch, 1 for none)"))
 
     def transfer_function(self) -> control.TransferFunction:
         """Return the notch as a python-control transfer function (gain ``depth`` at f_hz).
@@ -714,8 +714,10 @@ class Drive:
         Gain [-] of the velocity feed-forward (0 = none, 1 = full).
     torque_feedforward_inertia : float
         Inertia [kg m^2] used for the torque feed-forward, referred to the motor (0 = none).
-    lowpass, notch : LowPassFilter or NotchFilter, optional
-        Filters on the torque (current) set-point.
+    lowpass : LowPassFilter, optional
+        Low-pass on the torque (current) set-point.
+    notches : tuple of NotchFilter
+        Notches on the torque (current) set-point, applied after the low-pass in their order.
     sampling : Sampling, optional
         The digital drive (sample periods, delays, speed filter); None is the continuous drive
         of the paper.
@@ -749,7 +751,7 @@ class Drive:
     velocity_feedforward: float = 0.0
     torque_feedforward_inertia: float = 0.0
     lowpass: LowPassFilter | None = None
-    notch: NotchFilter | None = None
+    notches: tuple[NotchFilter, ...] = ()
     sampling: Sampling | None = None
     limits: DriveLimits | None = None
 
@@ -760,6 +762,12 @@ class Drive:
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Drive.{name} must be a {kind.__name__} or None")
         object.__setattr__(self, "kv", positive("Drive", "kv", self.kv, "1/s"))
+        if self.lowpass is not None and not isinstance(self.lowpass, LowPassFilter):
+            raise ValueError("Drive.lowpass must be a LowPassFilter or None")
+        notches = tuple(self.notches)
+        if not all(isinstance(n, NotchFilter) for n in notches):
+            raise ValueError("Drive.notches must be a sequence of NotchFilter")
+        object.__setattr__(self, "notches", notches)
         if self.feedback not in ("linear", "motor"):
             raise ValueError(f"Drive.feedback must be 'linear' or 'motor', got {self.feedback!r}")
         object.__setattr__(self, "velocity_feedforward", positive(
@@ -817,18 +825,23 @@ class Drive:
             return None
         return self.limits.speed_max * self.ratio
 
+    @property
+    def setpoint_filters(self) -> tuple:
+        """The torque set-point filters in their order: the low-pass (if any), then the
+        notches."""
+        return ((self.lowpass,) if self.lowpass is not None else ()) + self.notches
+
     def torque_filter(self) -> control.TransferFunction:
         """Return the product of the set-point filters (1 when there are none).
 
         Returns
         -------
         control.TransferFunction
-            The low-pass times the notch, those that are present.
+            The low-pass times the notches, those that are present.
         """
         tf = control.tf([1.0], [1.0])
-        for f in (self.lowpass, self.notch):
-            if f is not None:
-                tf = tf * f.transfer_function()
+        for f in self.setpoint_filters:
+            tf = tf * f.transfer_function()
         return tf
 
 

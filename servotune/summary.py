@@ -128,6 +128,16 @@ def design_table(job) -> Table:
                   _f(kv_to_m_per_min_per_mm(d1.kv), "{:.3g}")),
                  ("Kp velocity [N m s/rad]", _f(d0.kp), _f(d1.kp)),
                  ("Ti velocity [s]", _f(d0.ti), _f(d1.ti))]
+    if d1.notch is not None:
+        n0, n1 = d0.notch, d1.notch
+
+        def off(n, text):
+            return "none" if n is None or n.depth >= 1.0 - 1e-9 else text
+
+        rows += [("tuned notch [Hz]", off(n0, _f(n0 and n0.f_hz, "{:.1f}")),
+                  off(n1, _f(n1.f_hz, "{:.1f}"))),
+                 ("  width, depth [-]", off(n0, f"{n0.width:.3g}, {n0.depth:.3g}" if n0 else ""),
+                  off(n1, f"{n1.width:.3g}, {n1.depth:.3g}"))]
     after = r.after
     w0 = r.before.worst_model
     w1 = None if after is None else after.worst_model
@@ -275,7 +285,7 @@ def baseline_table(job) -> Table | None:
              f"{d['current_kp']:.4g} V/A, {d['current_ti'] * 1e3:.4g} ms; velocity PI "
              f"{d['velocity_kp']:.4g} N m s/rad, {d['velocity_ti'] * 1e3:.4g} ms; Kv "
              f"{d['kv']:.4g} 1/s; C {d['c']:.4g} N s/m"
-             + (f"; notch {d['notch']['f_hz']:.4g} Hz" if d.get("notch") else "")
+             + "".join(f"; notch {n['f_hz']:.4g} Hz" for n in d.get("notches") or ())
              if all(k in d for k in ("current_kp", "velocity_kp", "kv", "c")) else
              "commissioning: servotune.baseline (technical and symmetric optimum, a notch, "
              "Kv from the hierarchy)",
@@ -317,6 +327,8 @@ def rounds_table(job) -> Table | None:
         d = r.design
         design = ("-" if d is None else
                   f"C {d.c:.4g}, Kv {d.kv:.4g}, Kp {d.kp:.4g}, Ti {d.ti * 1e3:.4g} ms"
+                  + (f", notch {d.notch.f_hz:.1f} Hz (depth {d.notch.depth:.2g})"
+                     if d.notch is not None and d.notch.depth < 1.0 - 1e-9 else "")
                   if d.kv is not None else f"C {d.c:.4g}")
         label = "screen" if r.number == 0 else str(r.number)
         rows.append((label, design, r.verdict if len(r.verdict) < 160 else

@@ -150,9 +150,9 @@ kv_m_per_min_per_mm = 1.0           # the machine-tool Kv factor, or kv = 16.67 
 # torque_inertia = 0.015            # inertia for the torque feed-forward [kg m^2]
 # [drive.filters]
 # lowpass_hz = 800.0                # 2nd-order low-pass on the torque set-point [Hz]
-# notch_hz = 410.0                  # notch on the torque set-point [Hz]
-# notch_width = 0.5                 # relative -3 dB width [-]
-# notch_depth = 0.1                 # gain at the notch frequency [-]
+# notch_hz = 410.0                  # notch on the torque set-point [Hz]; a list for several
+# notch_width = 0.5                 # relative -3 dB width [-] (one per notch_hz)
+# notch_depth = 0.1                 # gain at the notch frequency [-] (one per notch_hz)
 
 [cutting]                           # the milling operation for the chatter limit
 teeth = 4
@@ -188,7 +188,8 @@ depth_required = 2.0e-3             # required axial depth of cut [m]
 # nonlinear_tolerance = 0.3         # the nonlinear axis may peak this much above the claim
 
 [tuning]                            # what `servotune tune` may change, and within which bounds
-free = ["c", "kv", "kp", "ti"]      # guide-way damping C, Kv, velocity-loop Kp and Ti
+free = ["c", "kv", "kp", "ti", "notch"]  # guide-way damping C, Kv, velocity-loop Kp and Ti,
+                                    # and a current set-point notch (frequency, width, depth)
 # c = [5578.0, 1.0e8]               # [N s/m] axis total (default: from the guide ways' own
 #                                     viscous friction sigma2 up: damping is added, not removed)
 kv = [1.0, 300.0]                   # [1/s]

@@ -1091,7 +1091,9 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
     linear_holds = bool(result.success) and not spread_thrust
     reasons += spread_thrust
     verdicts, failures = [], []
-    excluded = {m.regime: r for m, r in result.excluded}
+    excluded: dict = {}
+    for m, r in result.excluded:
+        excluded.setdefault(m.regime, []).append(f"{m.name}: {r}")
     for name in regimes:
         speed, claim_tuned, claim_before, models, band, _, levels, _ = regime_info[name]
         scan, scan_note = scanned[name]
@@ -1107,7 +1109,7 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         nl_before = _worst(before)
         why = []
         if name in excluded:
-            why.append(f"left out of the tuning: {excluded[name]}")
+            why += [f"left out of the tuning: {e}" for e in excluded[name]]
         if claim is None and name not in excluded:
             why.append("no linear claim for this regime")
         elif claim_tuned is not None and not math.isfinite(claim_tuned):

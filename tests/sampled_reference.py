@@ -190,9 +190,7 @@ def setpoint_biquads(drive, period: float) -> list[np.ndarray]:
     y_k = b0 x_k + b1 x_{k-1} + b2 x_{k-2} - a1 y_{k-1} - a2 y_{k-2}.
     """
     out = []
-    for f in (drive.lowpass, drive.notch):
-        if f is None:
-            continue
+    for f in drive.setpoint_filters:
         w = 2 * math.pi * f.f_hz
         if hasattr(f, "depth"):
             zp = 0.5 * f.width

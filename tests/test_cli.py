@@ -457,8 +457,8 @@ def test_verify_reads_the_results_file_tune_writes(tmp_path):
     design = Design(c=5578.0, kv=25.5, kp=5.85, ti=math.inf)
     write_results(tmp_path, {"axis": "axis", "design": design.to_dict()})
     (tmp_path / "axis").mkdir()
-    axis, values = read_result(tmp_path / "results.json")
-    assert axis == tmp_path / "axis"
+    axis, values, fixed = read_result(tmp_path / "results.json")
+    assert axis == tmp_path / "axis" and fixed is None
     assert values == {"c": 5578.0, "kv": 25.5, "kp": 5.85, "ti": math.inf}
     assert Design(**values) == design
 

@@ -183,7 +183,7 @@ CASES = [
     ("axis-chatter-weight", lambda t, s: ["modes", axis(t, s, sub(
         "chatter_weight = 0.0", "chatter_weight = 2.0"))], 1, "chatter_weight"),
     ("axis-free-unknown", lambda t, s: ["modes", axis(t, s, sub(
-        'free = ["c", "kv", "kp", "ti"]', 'free = ["zz"]'))], 1, "free"),
+        'free = ["c", "kv", "kp", "ti", "notch"]', 'free = ["zz"]'))], 1, "free"),
     ("axis-unknown-subtable", lambda t, s: ["modes", axis(t, s, lambda x: x
                                                           + "\n[friction.extra]\nx = 1\n")],
      1, "extra"),

@@ -52,7 +52,8 @@ CONFIGS = {
                {"current_loop": PIController(5.0, 2e-3)}),
     "filters": (Sampling(125e-6, 250e-6, 1e-3, integral_rule="tustin"),
                 {"lowpass": LowPassFilter(1200.0, 0.7),
-                 "notch": NotchFilter(410.0, width=0.5, depth=0.1)}),
+                 "notches": (NotchFilter(410.0, width=0.5, depth=0.1),
+                             NotchFilter(950.0, width=0.3, depth=0.2))}),
 }
 MODELS = Path(__file__).resolve().parents[1] / "models"
 CONTACT = Contact.viscous(2e4)  # viscous guide ways [N s/m], shared by the two pads

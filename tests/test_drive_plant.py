@@ -101,7 +101,7 @@ def test_interconnected_plant_equals_port_coupling(contact, feedback):
     # two independent assemblies: control.interconnect of state spaces, and the modal-sum
     # receptance at the ports closed by hand at each frequency
     drive = small_drive(feedback=feedback, lowpass=LowPassFilter(800.0),
-                        notch=NotchFilter(410.0, width=0.4, depth=0.05))
+                        notches=(NotchFilter(410.0, width=0.4, depth=0.05),))
     structure = small_axis()
     plant = build_plant(structure, drive, contact, PADS)
     h_plant = compliance(plant, OMEGA)

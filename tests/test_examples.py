@@ -219,7 +219,7 @@ def test_tune_axis_from_matrix_market(generate):
     omega = np.geomspace(*r["band"], 20001)
     peaks = {}
     fixed = r["drive_fixed"]   # the current loop and filters the tuning kept (commissioned)
-    notch = None if fixed["notch"] is None else st.drive.NotchFilter(**fixed["notch"])
+    notches = tuple(st.drive.NotchFilter(**n) for n in fixed["notches"])
     lowpass = None if fixed["lowpass"] is None else st.drive.LowPassFilter(**fixed["lowpass"])
     for key in ("initial_design", "design"):
         d = r[key]
@@ -227,7 +227,7 @@ def test_tune_axis_from_matrix_market(generate):
                                     velocity_loop=st.PIController(d["kp"], d["ti"]),
                                     current_loop=st.PIController(fixed["current_kp"],
                                                                  fixed["current_ti"]),
-                                    notch=notch, lowpass=lowpass)
+                                    notches=notches, lowpass=lowpass)
         worst = 0.0
         for model in axis_regimes(axis, r["initial_design"]["c"]):
             if not model.cutting:

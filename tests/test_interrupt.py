@@ -17,6 +17,19 @@ from servotune import interrupt
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.fixture(autouse=True)
+def _no_interrupt_left_over():
+    """A timer of a test that fires after it ended (a loaded machine) must not interrupt the
+    tests that follow: each test's timers are cancelled and the flag cleared at its end."""
+    before = set(threading.enumerate())
+    yield
+    for t in threading.enumerate():
+        if isinstance(t, threading.Timer) and t not in before:
+            t.cancel()
+            t.join()
+    interrupt._flag.clear()
+
+
 def _sigint_after(seconds: float) -> threading.Timer:
     timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()

@@ -162,7 +162,8 @@ def test_tuning_section_sets_free_variables_and_bounds(starter, tmp_path):
     folder = tmp_path / "axis"
     shutil.copytree(starter, folder)
     text = (folder / "axis.toml").read_text()
-    text = text.replace('free = ["c", "kv", "kp", "ti"]', 'free = ["c", "kp"]\nc = [6.0e3, 8.0e3]')
+    text = text.replace('free = ["c", "kv", "kp", "ti", "notch"]',
+                        'free = ["c", "kp"]\nc = [6.0e3, 8.0e3]')
     (folder / "axis.toml").write_text(text)
     axis = load_axis(folder)
     assert axis.tuning.free == ("c", "kp") and axis.tuning.bounds["c"] == (6e3, 8e3)
@@ -189,7 +190,7 @@ def test_a_damping_range_the_motor_cannot_push_is_refused_by_name(starter, tmp_p
     folder = tmp_path / "axis"
     shutil.copytree(starter, folder)
     text = (folder / "axis.toml").read_text()
-    (folder / "axis.toml").write_text(text.replace('free = ["c", "kv", "kp", "ti"]',
+    (folder / "axis.toml").write_text(text.replace('free = ["c", "kv", "kp", "ti", "notch"]',
                                                    'free = ["c"]\nc = [2.0e4, 5.0e4]'))
     axis = load_axis(folder)
     mass = 0.012 / axis.drive.ratio**2 + 400.0 + 400.0 + 2.0 + 300.0

@@ -75,7 +75,7 @@ def test_the_documented_drive_friction_cutting_and_requirements(axis):
     r = axis.requirements
     assert (r.ms_velocity_max, r.ms_position_max, r.depth_required) == (2.0, 1.5, 2.0e-3)
     assert_allclose(r.band, (2 * math.pi * 5.0, 2 * math.pi * 300.0), rtol=1e-15)
-    assert axis.tuning.free == ("c", "kv", "kp", "ti")
+    assert axis.tuning.free == ("c", "kv", "kp", "ti", "notch")
     assert dict(axis.tuning.bounds) == {"kv": (1.0, 300.0), "ti": (1.0e-3, 0.2)}
 
 

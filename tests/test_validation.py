@@ -121,7 +121,7 @@ def test_design_keeps_good_values():
     (lambda: Motor(1.2, NAN, 0.4, 3e-3), r"Motor\.back_emf_constant .* V s/rad"),
     (lambda: PIController(kp=0.0), r"PIController\.kp must be finite and > 0"),
     (lambda: PIController(kp=1.0, ti=0.0), r"PIController\.ti must be > 0 \(or inf\) s"),
-    (lambda: NotchFilter(100.0, depth=1.0), r"NotchFilter\.depth must be finite and in \[0, 1\)"),
+    (lambda: NotchFilter(100.0, depth=1.5), r"NotchFilter\.depth must be finite and in \[0, 1\]"),
     (lambda: Sampling(current_period=-1e-4), r"Sampling\.current_period .* >= 0 s"),
     (lambda: small_drive(kv=-5.0), r"Drive\.kv must be finite and > 0 1/s, got -5\.0"),
     (lambda: small_drive(ratio=0.0), r"Drive\.ratio must be finite and > 0 m/rad"),

@@ -36,6 +36,9 @@ __all__ = ["add_parser", "run", "read_result", "DESIGN_KEYS"]
 #: limits of the bounds of axis.toml's [tuning] (a unit slip beyond them is refused).
 DESIGN_KEYS = {"c": ("N s/m", 1e12), "kv": ("1/s", 1e4), "kp": ("N m s/rad", 1e7),
                "ti": ("s", 1e3)}
+#: The tuned current set-point notch's keys (optional; all three or none).
+NOTCH_KEYS = {"notch_frequency": ("rad/s", 1e7), "notch_width": ("-", 10.0),
+              "notch_depth": ("-", 1.0)}
 _WANTED = ("the design must hold c [N s/m], kv [1/s], kp [N m s/rad] and ti [s] as numbers, "
            "as servotune tune writes them")
 _WHERE = "e.g. out/tune_<axis>/results.json"
@@ -47,8 +50,9 @@ SPEED = number(0.0, 10.0, low_open=True, example=0.05, unit="m/s")
 FREQUENCY = number(0.0, 1e5, low_open=True, example=50, unit="Hz")
 
 
-def read_result(path) -> tuple[Path, dict]:
-    """Return the axis folder and the design of a tuning results file.
+def read_result(path) -> tuple[Path, dict, dict | None]:
+    """Return the axis folder, the design and the drive parts the tuning kept, of a tuning
+    results file.
 
     Parameters
     ----------
@@ -60,7 +64,12 @@ def read_result(path) -> tuple[Path, dict]:
     axis : pathlib.Path
         The axis folder.
     design : dict
-        The design: ``c``, ``kv``, ``kp``, ``ti`` [SI].
+        The design: ``c``, ``kv``, ``kp``, ``ti`` [SI] (and the tuned notch's
+        ``notch_frequency``, ``notch_width``, ``notch_depth`` when it has one).
+    fixed : dict or None
+        ``drive_fixed``: the current loop and set-point filters the design was tuned with
+        (:func:`servotune.design.with_drive_fixed`); None when the file has none (the axis'
+        own then).
 
     Raises
     ------
@@ -93,25 +102,37 @@ def read_result(path) -> tuple[Path, dict]:
         raise ValueError(f"{path}: 'design' must be an object {{'c', 'kv', 'kp', 'ti'}}, got "
                          f"{design!r}; {_WANTED}")
     values = _design_values(path, design)
-    return _axis_folder(path, data["axis"]), values
+    fixed = data.get("drive_fixed")
+    if fixed is not None and not isinstance(fixed, dict):
+        raise ValueError(f"{path}: 'drive_fixed' must be an object (current_kp, current_ti, "
+                         f"lowpass, notches), got {fixed!r}")
+    return _axis_folder(path, data["axis"]), values, fixed
 
 
 def _design_values(path: Path, design: dict) -> dict:
     """The four design values, each checked, with a message naming the key."""
     # tune writes a value that is not finite as null with '<key>_reason' beside it
-    reasons = {f"{k}_reason" for k in DESIGN_KEYS}
-    unknown = [k for k in design if k not in DESIGN_KEYS and k not in reasons]
+    keys = {**DESIGN_KEYS, **NOTCH_KEYS}
+    reasons = {f"{k}_reason" for k in keys}
+    unknown = [k for k in design if k not in keys and k not in reasons]
     if unknown:
         key = unknown[0]
-        close = difflib.get_close_matches(str(key), list(DESIGN_KEYS), n=1)
+        close = difflib.get_close_matches(str(key), list(keys), n=1)
         guess = f" (did you mean {close[0]!r}?)" if close else ""
         raise ValueError(f"{path}: design has an unknown key {key!r}{guess}; {_WANTED}")
     missing = [k for k in DESIGN_KEYS if k not in design]
     if missing:
         raise ValueError(f"{path}: design has no {', '.join(repr(k) for k in missing)}; "
                          f"{_WANTED}")
+    notch = [k for k in NOTCH_KEYS if design.get(k) is not None]
+    if notch and len(notch) != len(NOTCH_KEYS):
+        raise ValueError(f"{path}: design has {', '.join(notch)} but not all of "
+                         f"{', '.join(NOTCH_KEYS)}: the tuned notch needs its frequency, width "
+                         "and depth")
     values = {}
-    for key, (unit, high) in DESIGN_KEYS.items():
+    for key, (unit, high) in keys.items():
+        if key in NOTCH_KEYS and not notch:
+            continue
         value = design[key]
         where = f"{path}: design.{key}"
         if (key == "ti" and value is None
@@ -218,15 +239,15 @@ def run(args) -> int:
     from .. import interrupt, progress
 
     band = _band(args)
-    axis_path, values = read_result(args.result)
+    axis_path, values, fixed = read_result(args.result)
     with progress.task(f"loading {args.result}"):
         from .. import plots
         from ..axis import load_axis
-        from ..design import check_design
+        from ..design import check_design, with_drive_fixed
         from ..tuning import Design
         from ..verdict import nonlinear_verdict
 
-        axis = load_axis(axis_path)
+        axis = with_drive_fixed(load_axis(axis_path), fixed, args.result)
     if axis.drive is None or axis.friction is None:
         raise ValueError(f"{axis.file}: the nonlinear verification needs [drive] and [friction]")
     design = Design(**values)

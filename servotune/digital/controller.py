@@ -517,9 +517,7 @@ def digital_controller(drive: Drive) -> DigitalController:
     # current controller: set-point filters, current PI, delay
     blocks = []
     signal = "torque_set"
-    for i, f in enumerate((drive.lowpass, drive.notch)):
-        if f is None:
-            continue
+    for i, f in enumerate(drive.setpoint_filters):
         blocks.append(discrete_filter(f.transfer_function(), t, 2 * math.pi * f.f_hz, signal,
                                       f"setpoint_{i}", f"setpoint_filter_{i}"))
         signal = f"setpoint_{i}"

@@ -44,7 +44,7 @@ DEFAULT_FORCES = (50.0, 600.0, 2000.0)
 
 
 def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float | None = None,
-                 ti: float | None = None) -> AxisSetup:
+                 ti: float | None = None, notch=None) -> AxisSetup:
     """Return the axis set-up with a design's values.
 
     Parameters
@@ -59,6 +59,8 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
         Velocity-loop gain Kp [N m s/rad].
     ti : float, optional
         Velocity-loop integral time Ti [s] (inf: no integral action).
+    notch : servotune.drive.NotchFilter, optional
+        A tuned current set-point notch, after the drive's own filters.
 
     Returns
     -------
@@ -78,7 +80,8 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
     drive = dataclasses.replace(
         drive, kv=drive.kv if kv is None else float(kv),
         velocity_loop=PIController(drive.velocity_loop.kp if kp is None else float(kp),
-                                   drive.velocity_loop.ti if ti is None else float(ti)))
+                                   drive.velocity_loop.ti if ti is None else float(ti)),
+        notches=drive.notches + (() if notch is None else (notch,)))
     lugre = dataclasses.replace(setup.lugre, sigma2=float(c))
     return dataclasses.replace(setup, drive=drive, lugre=lugre, viscous=float(c))
 

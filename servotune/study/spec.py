@@ -403,7 +403,12 @@ def _read_design(path: str, file) -> dict:
     if not isinstance(design, dict) or "c" not in design:
         raise _err(file, "[study] design", f"{path} has no 'design' with c, kv, kp, ti",
                    "name the results.json that servotune tune wrote")
-    return {k: design.get(k) for k in ("c", "kv", "kp", "ti")}
+    out = {k: design.get(k) for k in ("c", "kv", "kp", "ti")}
+    out.update({k: design[k] for k in ("notch_frequency", "notch_width", "notch_depth")
+                if design.get(k) is not None})
+    # the current loop and filters it was tuned with (the commissioning's, by default)
+    out["drive_fixed"] = data.get("drive_fixed")
+    return out
 
 
 def apply_values(tables: dict, values, relative=lambda path: False,

@@ -83,7 +83,7 @@ def run_sample(settings: dict, sample: dict) -> dict:
         row[(FACTOR_PREFIX if path in relative else INPUT_PREFIX) + path] = value
     compute = set(settings["compute"])
     try:
-        from ..design import check_design, tuning_problem
+        from ..design import check_design, tuning_problem, with_drive_fixed
         from ..tuning import Design, tune
 
         applied: dict = {}
@@ -99,9 +99,10 @@ def run_sample(settings: dict, sample: dict) -> dict:
                                      dict(t.bounds))
             result = tune(problem, starts=int(settings.get("starts", 2)), seed=0)
         else:
-            fixed = settings.get("design")
-            if fixed is None:  # the axis' own design
+            fixed = dict(settings.get("design") or {})
+            if not fixed:  # the axis' own design
                 fixed = tuning_problem(axis).initial_design().to_dict()
+            axis = with_drive_fixed(axis, fixed.pop("drive_fixed", None))
             result = check_design(axis, Design(**fixed))
         d = result.design
         row.update({"c": d.c, "kv": d.kv, "kp": d.kp, "ti": d.ti,

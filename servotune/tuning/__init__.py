@@ -62,17 +62,20 @@ K. J. Astrom, R. M. Murray, Feedback Systems, 2nd ed. (2021), sec 13.3 (Ms and m
 from ..requirements import Requirements
 from .ports import ResponseModel, evaluate
 from .problem import (
+    NOTCH_VARIABLES,
     ChatterTarget,
     Design,
     NoStableStartError,
     RequirementsNotMetError,
     TuningDidNotConvergeError,
     TuningProblem,
+    expand_free,
 )
 from .solve import Prediction, TuningResult, TuningStatistics, tune
 from .verify import ModelPerformance, Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = [
+    "NOTCH_VARIABLES",
     "ChatterTarget",
     "Design",
     "ModelPerformance",
@@ -88,6 +91,7 @@ __all__ = [
     "TuningResult",
     "TuningStatistics",
     "evaluate",
+    "expand_free",
     "requirement_checks",
     "tune",
     "verify",

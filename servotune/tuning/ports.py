@@ -80,10 +80,42 @@ class _Cx:
 
 DRIVE_PARTS = ("forward", "winding")
 #: The digital drive's parts at a frequency w (design-independent; see :func:`sampled_parts`).
-SAMPLED_PARTS = ("h0", "k_ci", "k_ct", "dv_m", "dv", "qv", "hold_v", "hold_p", "dp")
+SAMPLED_PARTS = ("h0", "k_ci", "k_ct", "dv_m", "dv", "qv", "hold_v", "hold_p", "dp", "half")
 #: Per model and frequency: the zero-order hold's aliases of the sampled current, angle and
 #: position per voltage, and the corrections of the lifts beyond their first term.
 CORRECTIONS = ("a_i", "a_phi", "a_x", "d_vphi", "d_vx", "d_px")
+
+
+def notch_response(design, omega, half=None, period: float = 0.0):
+    """The tuned current set-point notch's response (a :class:`_Cx`) for numeric or symbolic
+    design values ``notch_frequency`` w0 [rad/s], ``notch_width`` (2 zeta_p) and
+    ``notch_depth`` (zeta_z = zeta_p depth).
+
+    Continuous (``half`` None): ``(w0^2 - w^2 + 2j zeta_z w0 w) / (w0^2 - w^2 + 2j zeta_p w0
+    w)``. Digital, as the drive computes it (Tustin prewarped to w0, in the current
+    controller's cycle T, :func:`servotune.digital.discrete_filter`): s = (w0 / k) (z - 1) /
+    (z + 1) with k = tan(w0 T / 2), and at z = exp(j w T), (z - 1)/(z + 1) = j tan(w T / 2);
+    with ``half = exp(j w T / 2) = c + j s`` and both sides times (k c)^2 / w0^2::
+
+        F = (k^2 c^2 - s^2 + 2j zeta_z k s c) / (k^2 c^2 - s^2 + 2j zeta_p k s c)
+
+    which stays finite at the Nyquist frequency (c = 0: F = 1).
+    """
+    w0 = design["notch_frequency"]
+    zp = 0.5 * design["notch_width"]
+    zz = zp * design["notch_depth"]
+    if half is None:
+        re = w0 * w0 - omega * omega
+        return _Cx(re, 2.0 * zz * w0 * omega) / _Cx(re, 2.0 * zp * w0 * omega)
+    k = _tan(0.5 * w0 * period)
+    c, s = half.re, half.im
+    re = k * k * c * c - s * s
+    return _Cx(re, 2.0 * zz * k * s * c) / _Cx(re, 2.0 * zp * k * s * c)
+
+
+def _tan(x):
+    """tan of a number or a casadi expression."""
+    return x.tan() if hasattr(x, "tan") else np.tan(x)
 
 
 def is_sampled(problem: TuningProblem) -> bool:
@@ -101,7 +133,8 @@ def sampled_parts(drive, omega: np.ndarray) -> dict:
     of the velocity PI, ``C_v = Kp (1 + qv / Ti)``; ``hold_v``, ``hold_p`` the fundamentals
     ``B_N(w)/N`` of the velocity and position controllers' holds; ``dp = z_p^-d``, set to 0
     above the position controller's Nyquist frequency (there the position loop's rows are
-    void: its response repeats).
+    void: its response repeats); ``half = exp(j w T / 2)`` (T the current period) for the
+    tuned notch (:func:`notch_response`).
     """
     from ..digital import digital_controller
     from ..digital.sampled import _box, hold_fundamental
@@ -124,7 +157,7 @@ def sampled_parts(drive, omega: np.ndarray) -> dict:
     return {"h0": hold_fundamental(omega, t), "k_ci": ctl.response("current", "current", z),
             "k_ct": ctl.response("current", "torque_set", z), "dv_m": zv ** (-d) * m,
             "dv": zv ** (-d), "qv": qv, "hold_v": _box(omega, t, n_v) / n_v,
-            "hold_p": _box(omega, tv, n_p) / n_p, "dp": dp}
+            "hold_p": _box(omega, tv, n_p) / n_p, "dp": dp, "half": np.exp(0.5j * omega * t)}
 
 
 _AXES: dict = {}
@@ -430,6 +463,8 @@ def responses(problem: TuningProblem, data, design) -> dict:
     cv = design["kp"] * (1.0 + 1.0 / (s * design["ti"]))
     den = parts["winding"]
     a = parts["forward"] * cv
+    if problem.notch is not None:
+        a = a * notch_response(design, data.omega)
     b = m.torque_constant * m.back_emf_constant
     p_phi = rc("e", "e")
     p_fb = rc("f", "e")
@@ -488,9 +523,13 @@ def _sampled_responses(problem: TuningProblem, data, design, s, rc) -> dict:
     plant = _plant_parts(problem, data, None, s, rc)
     parts, corr = data.drive, data.corrections
     h0 = parts["h0"]
+    k_ct = parts["k_ct"]
+    if problem.notch is not None:
+        k_ct = k_ct * notch_response(design, data.omega, parts["half"],
+                                     problem.drive.sampling.current_period)
     cur = cascade.current_level(h0 * plant["i_u"] + corr["a_i"],
                                 h0 * plant["phi_u"] + corr["a_phi"],
-                                h0 * plant["x_u"] + corr["a_x"], parts["k_ci"], parts["k_ct"])
+                                h0 * plant["x_u"] + corr["a_x"], parts["k_ci"], k_ct)
     cv = design["kp"] * (1.0 + parts["qv"] / design["ti"])
     k_vphi = -(parts["dv_m"] * cv)
     k_vomega = parts["dv"] * cv

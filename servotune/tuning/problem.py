@@ -5,17 +5,49 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from ..drive import Drive, PIController
+from ..drive import Drive, NotchFilter, PIController
 from ..regimes import RegimeModel
 from ..requirements import Requirements
 from ..structure.model import ModalModel
 from ..thrust import ThrustBudget
 from ..validation import positive
 
-__all__ = ["VARIABLES", "ChatterTarget", "Design", "NoStableStartError",
+__all__ = ["NOTCH_VARIABLES", "VARIABLES", "ChatterTarget", "Design", "NoStableStartError",
            "RequirementsNotMetError", "TuningDidNotConvergeError", "TuningProblem"]
 
-VARIABLES = ("c", "kv", "kp", "ti")
+VARIABLES = ("c", "kv", "kp", "ti", "notch_frequency", "notch_width", "notch_depth")
+#: The tuned current set-point notch's variables (``"notch"`` in ``free`` names all three).
+NOTCH_VARIABLES = ("notch_frequency", "notch_width", "notch_depth")
+#: The widest notch the tuner sets (relative -3 dB width, 2 zeta_p): one octave and a bit;
+#: a wider one is a low-pass's job.
+NOTCH_WIDTH_MAX = 1.0
+#: SI units of the design variables.
+UNITS = {"c": "N s/m", "kv": "1/s", "kp": "N m s/rad", "ti": "s", "notch_frequency": "rad/s",
+         "notch_width": "-", "notch_depth": "-"}
+
+
+def expand_free(free) -> tuple[str, ...]:
+    """Return the free variables with the shorthand ``"notch"`` written out as its three
+    variables (frequency, width, depth), in order and without repeats.
+
+    Parameters
+    ----------
+    free : str or sequence of str
+        Variable names (:data:`VARIABLES` and ``"notch"``).
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
+    >>> expand_free(["c", "notch", "kv"])
+    ('c', 'notch_frequency', 'notch_width', 'notch_depth', 'kv')
+    """
+    out = []
+    for v in ((free,) if isinstance(free, str) else free):
+        out += list(NOTCH_VARIABLES) if v == "notch" else [v]
+    return tuple(dict.fromkeys(out))
 
 
 class RequirementsNotMetError(ValueError):
@@ -132,7 +164,9 @@ class ChatterTarget:
 @dataclass(frozen=True)
 class Design:
     """Values of the design variables (SI): C [N s/m] (axis total), Kv [1/s], Kp [N m s/rad],
-    Ti [s]. Variables without a drive may be None.
+    Ti [s] and the tuned current set-point notch (:class:`~servotune.drive.NotchFilter`): its
+    frequency [rad/s], relative width and depth (gain at its frequency, in (0, 1]). Variables
+    without a drive (or without a tuned notch) may be None.
 
     Raises
     ------
@@ -152,15 +186,32 @@ class Design:
     kv: float | None = None
     kp: float | None = None
     ti: float | None = None
+    notch_frequency: float | None = None
+    notch_width: float | None = None
+    notch_depth: float | None = None
 
     def __post_init__(self) -> None:
-        units = {"c": "N s/m", "kv": "1/s", "kp": "N m s/rad", "ti": "s"}
         for name in VARIABLES:
             value = getattr(self, name)
             if value is None and name != "c":
                 continue
-            value = positive("Design", name, value, units[name], allow_inf=(name == "ti"))
+            value = positive("Design", name, value, UNITS[name], allow_inf=(name == "ti"))
             object.__setattr__(self, name, value)
+        present = [getattr(self, v) is not None for v in NOTCH_VARIABLES]
+        if any(present) and not all(present):
+            raise ValueError("Design: give the notch's frequency, width and depth together "
+                             f"(got {dict(zip(NOTCH_VARIABLES, present, strict=True))})")
+        if self.notch_depth is not None and self.notch_depth > 1.0:
+            raise ValueError(f"Design.notch_depth must lie in (0, 1] (the notch's gain at its "
+                             f"frequency), got {self.notch_depth!r}")
+
+    @property
+    def notch(self) -> NotchFilter | None:
+        """The tuned current set-point notch (None without one)."""
+        if self.notch_frequency is None:
+            return None
+        return NotchFilter(self.notch_frequency / (2.0 * math.pi), self.notch_width,
+                           self.notch_depth)
 
     def to_dict(self) -> dict:
         """Return the design as JSON-ready data.
@@ -168,9 +219,14 @@ class Design:
         Returns
         -------
         dict
-            ``{"c", "kv", "kp", "ti"}`` (SI; None for a variable without a drive).
+            ``{"c", "kv", "kp", "ti"}`` (SI; None for a variable without a drive) and, with a
+            tuned notch, ``notch_frequency`` [rad/s], ``notch_width`` and ``notch_depth``.
         """
-        return {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
+        out = {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
+        if self.notch_frequency is not None:
+            out.update(notch_frequency=self.notch_frequency, notch_width=self.notch_width,
+                       notch_depth=self.notch_depth)
+        return out
 
 
 @dataclass(frozen=True)
@@ -188,9 +244,13 @@ class TuningProblem:
     drive : Drive, optional
         Initial drive (its Kv, velocity Kp and Ti are the initial gains).
     free : sequence of str
-        Which of ``("c", "kv", "kp", "ti")`` the optimiser may change.
+        Which of :data:`VARIABLES` the optimiser may change (``"notch"``: the tuned notch's
+        three).
     bounds : dict, optional
-        ``{name: (low, high)}`` in SI; defaults: a factor 100 either way of the initial value.
+        ``{name: (low, high)}`` in SI; defaults: a factor 100 either way of the initial value;
+        for the notch: its frequency within a factor 1.5 either way (and below 0.45 times the
+        current controller's sample rate), width 0.05-:data:`NOTCH_WIDTH_MAX`, depth
+        0.01-1.
     requirements : Requirements
         Robustness and performance requirements.
     chatter : ChatterTarget, optional
@@ -225,6 +285,10 @@ class TuningProblem:
         objective of :func:`servotune.tuning.solve.tune`).
     held_caps : tuple of float
         Their caps [m/N], one per held model.
+    notch : NotchFilter, optional
+        The tuned current set-point notch (its initial values): it follows the drive's own
+        set-point filters (:meth:`drive_for`); its variables are free when ``free`` names
+        them, else it stays as given.
 
     Raises
     ------
@@ -256,6 +320,7 @@ class TuningProblem:
     n_grid: int = 60
     held: tuple[int, ...] = ()
     held_caps: tuple[float, ...] = ()
+    notch: NotchFilter | None = None
 
     def __post_init__(self) -> None:
         regimes = tuple(self.regimes)
@@ -273,12 +338,18 @@ class TuningProblem:
         pads = tuple(self.pads)
         self.structure.index([*list(pads), self.force])
         object.__setattr__(self, "pads", pads)
-        free = tuple(dict.fromkeys(self.free))
+        free = expand_free(self.free)
         unknown = [v for v in free if v not in VARIABLES]
         if unknown:
             raise ValueError(f"unknown design variables {unknown}; choose from {VARIABLES}")
-        if self.drive is None and set(free) - {"c"}:
-            raise ValueError(f"free variables {sorted(set(free) - {'c'})} need a drive")
+        if self.drive is None and (set(free) - {"c"} or self.notch is not None):
+            raise ValueError(f"free variables {sorted(set(free) - {'c'})} and a notch need a "
+                             "drive")
+        if self.notch is not None and not isinstance(self.notch, NotchFilter):
+            raise ValueError("notch must be a NotchFilter or None")
+        if set(free) & set(NOTCH_VARIABLES) and self.notch is None:
+            raise ValueError("the notch's variables are free but there is no notch to tune "
+                             "(give TuningProblem.notch, its initial values)")
         if "c" in free and not pads:
             raise ValueError("tuning C needs the pad DOFs (pads=...)")
         if not free:
@@ -297,14 +368,32 @@ class TuningProblem:
             raise ValueError("a chatter weight needs a ChatterTarget (chatter=...)")
         design = self.initial_design()
         checked = {}
+        defaults = self._notch_bounds(design)
         for name in VARIABLES:
             value = getattr(design, name)
-            lo, hi = self.bounds.get(name, (value / 100.0, value * 100.0) if value else (0, 0))
+            if value is None and name in NOTCH_VARIABLES:
+                continue
+            lo, hi = self.bounds.get(name, defaults.get(name) or (
+                (value / 100.0, value * 100.0) if value else (0, 0)))
             if name in free and not (0 < lo <= value <= hi < math.inf):
                 raise ValueError(f"bounds of {name} must satisfy 0 < low <= initial <= high, got "
                                  f"({lo!r}, {hi!r}) with initial {value!r}")
             checked[name] = (float(lo), float(hi))
         object.__setattr__(self, "bounds", checked)
+
+    def _notch_bounds(self, design: Design) -> dict:
+        """The default bounds of the notch's variables (see the class docstring)."""
+        if design.notch_frequency is None:
+            return {}
+        w0 = design.notch_frequency
+        top = 1.5 * w0
+        sampling = self.drive.sampling if self.drive is not None else None
+        if sampling is not None and not sampling.is_continuous:
+            top = min(top, 0.45 * 2.0 * math.pi / sampling.current_period)
+        return {"notch_frequency": (min(w0 / 1.5, top), max(top, w0)),
+                "notch_width": (min(0.05, design.notch_width),
+                                max(NOTCH_WIDTH_MAX, design.notch_width)),
+                "notch_depth": (min(0.01, design.notch_depth), 1.0)}
 
     @property
     def cutting_models(self) -> tuple[int, ...]:
@@ -339,7 +428,11 @@ class TuningProblem:
         d = self.drive
         if d is None:
             return Design(c=float(self.c))
-        return Design(c=float(self.c), kv=d.kv, kp=d.velocity_loop.kp, ti=d.velocity_loop.ti)
+        n = self.notch
+        notch = {} if n is None else {"notch_frequency": 2.0 * math.pi * n.f_hz,
+                                      "notch_width": n.width, "notch_depth": n.depth}
+        return Design(c=float(self.c), kv=d.kv, kp=d.velocity_loop.kp, ti=d.velocity_loop.ti,
+                      **notch)
 
     def drive_for(self, design: Design) -> Drive | None:
         """Return the drive with a design's gains.
@@ -352,12 +445,16 @@ class TuningProblem:
         Returns
         -------
         Drive or None
-            The problem's drive with Kv and the velocity PI of the design; None without a
+            The problem's drive with Kv and the velocity PI of the design and, when the
+            problem tunes a notch, the design's notch after the drive's own; None without a
             drive.
         """
         if self.drive is None:
             return None
-        return replace(self.drive, kv=design.kv,
+        notches = self.drive.notches
+        if self.notch is not None and design.notch is not None:
+            notches = (*notches, design.notch)
+        return replace(self.drive, kv=design.kv, notches=notches,
                        velocity_loop=PIController(kp=design.kp, ti=design.ti))
 
 

@@ -44,6 +44,7 @@ from ..units import HZ_PER_RAD_S
 from .nlp import Kernels, Solution, Solver, gate_parameters
 from .ports import ResponseModel, grid, is_sampled, port_data
 from .problem import (
+    NOTCH_VARIABLES,
     Design,
     NoStableStartError,
     RequirementsNotMetError,
@@ -144,7 +145,8 @@ def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
                             model.contact(design.c) if problem.pads else None,
                             problem.pads).is_stable() for model in problem.regimes]
     matrices = ClosedLoopMatrices.of(problem)
-    if matrices.exact:
+    if matrices.exact and not set(problem.free) & set(NOTCH_VARIABLES):
+        # (the form holds at the initial notch; a tuned one is built)
         return [frequency.is_stable_matrix(a) for a in matrices(design)]
     return [frequency.is_stable(matrices.build(model, design)) for model in problem.regimes]
 
@@ -902,13 +904,22 @@ def held_models(problem: TuningProblem, design: Design, step: float = 0.1,
 
     base = peaks(design)
     sens = np.zeros(len(cut))
+    # the peaks between the grid's points (a lightly damped mode falls between them): a held
+    # model is capped at its value, so its peak must be the true one
     for v in problem.free:
-        lo, hi = (dataclasses.replace(design, **{v: getattr(design, v) * math.exp(s)})
-                  for s in (-step, step))
-        sens = np.maximum(sens, np.abs(np.log(peaks(hi) / peaks(lo))) / (2 * step))
+        lo, hi = (dataclasses.replace(design, **{v: float(np.clip(
+            getattr(design, v) * math.exp(s), *problem.bounds[v]))}) for s in (-step, step))
+        if lo == hi:
+            continue
+        span = math.log(getattr(hi, v) / getattr(lo, v))
+        sens = np.maximum(sens, np.abs(np.log(peaks(hi) / peaks(lo))) / span)
     held = [i for i in range(len(cut)) if sens[i] < HOLD_SENSITIVITY]
     if len(held) == len(cut):
         return ()
+    base = base.copy()
+    for i in held:
+        base[i] = _refined_peak(problem, design, cut[i], omega,
+                                np.abs(model(design, exact=False)["compliance"][cut[i]]))
     out = []
     for i in held:
         m = problem.regimes[cut[i]]
@@ -921,6 +932,29 @@ def held_models(problem: TuningProblem, design: Design, step: float = 0.1,
                              f"{100 * sens[i] * step:.2g} % when any free variable changes by "
                              f"{100 * (math.exp(step) - 1):.0f} % ({what}); held there"))
     return tuple(out)
+
+
+def _refined_peak(problem: TuningProblem, design: Design, index: int, omega: np.ndarray,
+                  mag: np.ndarray, rounds: int = 4, n: int = 41) -> float:
+    """The compliance peak of model ``index`` refined between the grid's points: each
+    local maximum of ``mag`` on ``omega`` within 0.5 % of the grid's largest is zoomed on
+    (``rounds`` times ``n`` points across its neighbours), the largest found returned."""
+    top = float(mag.max())
+    inner = np.nonzero((mag[1:-1] >= mag[:-2]) & (mag[1:-1] >= mag[2:])
+                       & (mag[1:-1] >= 0.005 * top))[0] + 1
+    candidates = sorted(inner, key=lambda i: -mag[i])[:4] or [int(np.argmax(mag))]
+    one = dataclasses.replace(problem, regimes=(problem.regimes[index],), held=(),
+                              held_caps=())
+    best = top
+    for i in candidates:
+        lo, hi = omega[max(i - 1, 0)], omega[min(i + 1, omega.size - 1)]
+        for _ in range(rounds):
+            w = np.linspace(lo, hi, n)
+            m = np.abs(ResponseModel(one, w, design)(design, exact=False)["compliance"][0])
+            j = int(np.argmax(m))
+            best = max(best, float(m[j]))
+            lo, hi = w[max(j - 1, 0)], w[min(j + 1, n - 1)]
+    return best
 
 
 @one_thread
@@ -1049,8 +1083,9 @@ def _exclusion_reason(model) -> str:
     slope = model.slope()
     if slope is not None and slope < 0:
         return (f"unstable for every design tried: the sliding friction falls with speed there "
-                f"(slope {slope:.3g} N s/m below the Stribeck speed), stick-slip is to be "
-                "expected; feed faster, or add viscous damping")
+                f"(slope {slope:.3g} N s/m below the Stribeck speed) and feeds a self-excited "
+                "oscillation (of the pads on their contact stiffness, or stick-slip of the "
+                "slide); feed faster, or add viscous damping")
     return "unstable for every design tried"
 
 
