@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from .cache import cached_njit
 
 __all__ = ["pole_terms", "pole_sum", "mode_terms", "solve_batched", "hessenberg_solve"]
 
 
-@numba.njit(cache=True, error_model="numpy")
+@cached_njit(error_model="numpy")
 def pole_terms(lam_re, lam_im, omega, p, q):
     """``p + j q = 1 / (j omega_k - lambda_i)`` into p, q of shape (n, K)."""
     for i in range(lam_re.size):
@@ -29,7 +30,7 @@ def pole_terms(lam_re, lam_im, omega, p, q):
             q[i, k] = -d * inv
 
 
-@numba.njit(cache=True, error_model="numpy")
+@cached_njit(error_model="numpy")
 def pole_sum(res_re, res_im, lam_re, lam_im, omega, out_re, out_im):
     """``out += sum_i R[:, i] / (j omega_k - lambda_i)`` for residues R (q, n), out (q, K)."""
     tp = np.empty(omega.size)
@@ -51,7 +52,7 @@ def pole_sum(res_re, res_im, lam_re, lam_im, omega, out_re, out_im):
                 out_im[j, k] += rr * tq[k] + ri * tp[k]
 
 
-@numba.njit(cache=True, error_model="numpy")
+@cached_njit(error_model="numpy")
 def mode_terms(omega2_r, damping_r, omega, p, q):
     """``p + j q = 1 / (omega_r^2 - omega_k^2 + j omega_k d_r)`` into p, q of shape (r, K)
     (d_r = 2 zeta_r omega_r, the modal damping)."""
@@ -66,7 +67,7 @@ def mode_terms(omega2_r, damping_r, omega, p, q):
             q[i, k] = -im * inv
 
 
-@numba.njit(cache=True)
+@cached_njit
 def solve_batched(a, b):
     """Solve ``a[k] x[k] = b[k]`` for a stack of small complex systems (K, n, n), (K, n) in
     place (Gaussian elimination with partial pivoting); b receives x (NaN for a singular
@@ -110,7 +111,7 @@ def solve_batched(a, b):
             b[k, c] = acc / a[k, c, c]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def hessenberg_solve(h, omega, rhs, out):
     """Solve ``(j omega_k I - H) x_k = rhs`` for an upper Hessenberg H (n, n), rhs (n, m)
     complex, x into out (K, n, m).
@@ -127,7 +128,7 @@ def hessenberg_solve(h, omega, rhs, out):
     hessenberg_solve_shifts(h, shifts, rhs, out)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def hessenberg_solve_shifts(h, shifts, rhs, out):
     """Solve ``(s_k I - H) x_k = rhs`` at complex shifts s_k (e.g. the points z of a discrete
     system's frequency response); otherwise as :func:`hessenberg_solve`."""

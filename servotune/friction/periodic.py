@@ -34,15 +34,15 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ..cache import cached_njit
 from .lugre import LuGreParameters
 
 __all__ = ["lugre_periodic_force", "lugre_periodic_state", "lugre_periodic_jacobian"]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _stribeck(au, fc, fs, vs, delta):
     """g(|u|) and dg/d|u| (one exponential; no power for delta = 1)."""
     x = au / vs
@@ -55,7 +55,7 @@ def _stribeck(au, fc, fs, vs, delta):
     return fc + (fs - fc) * e, slope
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _rate(u, sigma0, fc, fs, vs, delta):
     """a(u) = sigma0 |u| / g(u) [1/s]."""
     au = abs(u)
@@ -65,7 +65,7 @@ def _rate(u, sigma0, fc, fs, vs, delta):
     return sigma0 * au / g
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _periodic_orbit(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z, force):
     n = v.size
     e_step = np.empty(n)
@@ -102,7 +102,7 @@ def _periodic_orbit(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z, forc
         zi = e_step[i] * zi + b_step[i]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _rate_and_slope(u, sigma0, fc, fs, vs, delta):
     """a(u) = sigma0 |u| / g(u) and da/du (0 at u = 0, where |u| has no derivative)."""
     au = abs(u)
@@ -113,7 +113,7 @@ def _rate_and_slope(u, sigma0, fc, fs, vs, delta):
     return sigma0 * au / g, sigma0 * sgn * (1.0 / g - au * dg / (g * g))
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _periodic_jacobian(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basis, force, out):
     """Force on the periodic orbit and ``(dF/dv) @ basis`` (N x m) by forward sensitivities
     of the exact steps with the periodicity condition on them, in O(N m)."""
@@ -183,13 +183,13 @@ def _periodic_jacobian(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basi
             out[i, k] = dfdz * w[k] + direct * basis[i, k]
             w[k] = e_step[i] * w[k] + c_step[i] * bu[i, k]
 
-@numba.njit(cache=True)
+@cached_njit
 def _orbit_rows(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z, force):
     for r in range(v.shape[0]):
         _periodic_orbit(v[r], h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, z[r], force[r])
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _jacobian_rows(v, h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basis, force, out):
     for r in range(v.shape[0]):
         _periodic_jacobian(v[r], h, sigma0, sigma1, sigma2, fc, fs, vs, delta, vd, basis,

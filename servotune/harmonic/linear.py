@@ -40,9 +40,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 
+from ..cache import cached_njit
 from ..drive import Drive
 from ..structure.model import ModalModel, signal_name
 
@@ -129,7 +129,7 @@ class PadReceptance:
         return out
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _polynomial(c, s):
     out = c[0] + 0j
     for i in range(1, c.size):
@@ -137,7 +137,7 @@ def _polynomial(c, s):
     return out
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _receptance_kernel(omega, omega2, damping, shapes, n_right, n, has_drive, ci_n, ci_d,
                        f_n, f_d, cv_n, cv_d, delays, motor, out):
     """Modal sum between the ports, then the torque closed through the motor port (rows:

@@ -69,6 +69,8 @@ import numba
 import numpy as np
 import scipy.linalg
 
+from ..cache import cache_folder, cached_njit, writable_folder
+
 __all__ = ["ModalForm", "modal_form", "StepWeights", "step_weights", "phi_functions",
            "chunk_kernel", "controller_arrays", "integrate_chunk", "sum_of_squares",
            "MAX_LEVEL", "N_POWERS"]
@@ -289,7 +291,7 @@ def step_weights(lam: np.ndarray, h: float, cy_br=None, levels: int = MAX_LEVEL)
 # kernel checks for them)
 _FAST = False  # bit-reproducible: results must not depend on how the kernel was compiled
 
-@numba.njit(cache=True, fastmath=_FAST)
+@cached_njit(fastmath=_FAST)
 def _u_into(samples, s, out):
     """Known inputs at position s (in sample units) into out: the sample itself on a sample,
     else the cubic through the four samples around s."""
@@ -313,7 +315,7 @@ def _u_into(samples, s, out):
             out[c] += wgt * samples[i0 + a, c]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _solve_small(a, x, n):
     """Solve a[:n, :n] x = x in place (Gaussian elimination with partial pivoting; a is
     overwritten). Returns False for a singular matrix."""
@@ -348,7 +350,7 @@ def _solve_small(a, x, n):
     return True
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@cached_njit(fastmath=_FAST)
 def sum_of_squares(rows_re, rows_im, xr, xm):
     """Return sum_q (Re(rows[q] . xi))^2 for xi = xr + i xm (energies at checkpoints).
 
@@ -375,7 +377,7 @@ def sum_of_squares(rows_re, rows_im, xr, xm):
     return total
 
 
-@numba.njit(cache=True, fastmath=_FAST)
+@cached_njit(fastmath=_FAST)
 def _powers(xr, xm, u, r2, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads, vals, out):
     """Powers [W] at one instant: work-piece forces, motor, friction, damping.
 
@@ -414,7 +416,7 @@ def _powers(xr, xm, u, r2, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads,
     out[3] = p_damp
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _no_remainder(component, v, z, p):
     """The remainder of a law without one (never called: such a law has no remainder input)."""
     return math.nan, math.nan, math.nan
@@ -424,7 +426,7 @@ def _no_remainder(component, v, z, p):
 _remainder = _no_remainder
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _controller_update(k, xr, xm, samples, si, meas_re, meas_im, ref_cols, ctl_every, ctl_n,
                        ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, g, tmp):
     """The digital drive's controllers at fast sample k (levels slow to fast; see
@@ -866,21 +868,11 @@ def _compiled_sources(dispatcher, files: dict) -> dict:
 
 
 def _kernel_directory() -> Path:
-    """Where the generated kernel modules are written (numba caches next to them)."""
+    """Where the generated kernel modules are written, numba's caches of them in its
+    ``__pycache__``: ``SERVOTUNE_KERNEL_DIR``, else the ``kernels`` folder of servotune's user
+    cache (:mod:`servotune.cache`); never the package."""
     env = os.environ.get("SERVOTUNE_KERNEL_DIR")
-    candidates = [Path(env)] if env else []
-    candidates += [Path(__file__).parent / "__pycache__" / "kernels",
-                   Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
-                   / "servotune" / "kernels"]
-    for folder in candidates:
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError:
-            continue
-        if os.access(folder, os.W_OK):
-            return folder
-    raise OSError(f"no writable folder for the compiled kernels among "
-                  f"{[str(c) for c in candidates]}; set SERVOTUNE_KERNEL_DIR")
+    return writable_folder(env) if env else cache_folder("kernels")
 
 
 def _prune(folder: Path, current: Path, age: float = 86400.0) -> None:
@@ -912,19 +904,24 @@ def chunk_kernel(remainder=None):
     -------
     numba dispatcher
         :func:`integrate_chunk` compiled with the remainder called directly (a direct call is
-        several times faster than a function passed as an argument), cached on disk by numba.
+        several times faster than a function passed as an argument), cached on disk by numba
+        next to the generated module, in servotune's user cache.
 
     Raises
     ------
     TypeError
         If ``remainder`` is not a ``numba.njit`` function, or not a module-level function
         importable by its name.
+    servotune.cache.CacheFolderError
+        If the kernel folder cannot be created or written.
 
     Notes
     -----
     The kernel is the source of :func:`integrate_chunk` in a generated module that imports the
-    remainder by name, written once into a kernel folder (``SERVOTUNE_KERNEL_DIR``, else this
-    package's ``__pycache__/kernels``, else ``~/.cache/servotune/kernels``). numba's on-disk
+    remainder by name, written once into a kernel folder (``SERVOTUNE_KERNEL_DIR``, else the
+    ``kernels`` folder of servotune's user cache, :mod:`servotune.cache`; never into the
+    package, which may be read-only once installed); numba caches it in the ``__pycache__``
+    of that folder (or in ``NUMBA_CACHE_DIR`` if the user set one). numba's on-disk
     cache checks only the time stamp of a cached function's own file, not of the functions it
     calls; so the module's name carries a hash of this file and of the source files of the
     remainder and of every compiled function it calls (found through their global names), and

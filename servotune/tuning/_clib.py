@@ -31,6 +31,9 @@ import warnings
 
 import casadi as ca
 
+from ..cache import cache_folder as _user_cache_folder
+from ..cache import cache_root
+
 __all__ = ["compiler", "cache_folder", "compile_functions", "FLAGS", "KEEP"]
 
 #: Flags of the compilation (besides -fPIC -shared): -O1 compiles the large kernels in about a
@@ -60,28 +63,25 @@ def compiler() -> str | None:
 def cache_folder() -> str | None:
     """Return the folder of the compiled kernels.
 
+    The ``casadi`` folder of servotune's user cache (:func:`servotune.cache.cache_folder`:
     ``$SERVOTUNE_CACHE/casadi``, else ``$XDG_CACHE_HOME/servotune/casadi`` or
-    ``~/.cache/servotune/casadi``; None (no cache: the library is compiled into a temporary
-    folder of the process) when ``SERVOTUNE_CACHE`` is empty or the folder cannot be created.
+    ``~/.cache/servotune/casadi``); None (no cache: the library is compiled into a temporary
+    folder of the process) when ``SERVOTUNE_CACHE`` is empty.
 
     Returns
     -------
     str or None
         An absolute path.
+
+    Raises
+    ------
+    servotune.cache.CacheFolderError
+        If the folder cannot be created or written (the message says to set
+        ``SERVOTUNE_CACHE``).
     """
-    base = os.environ.get("SERVOTUNE_CACHE")
-    if base == "":
+    if cache_root() is None:
         return None
-    if base is None:
-        xdg = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"),
-                                                                 ".cache")
-        base = os.path.join(xdg, "servotune")
-    folder = os.path.abspath(os.path.join(base, "casadi"))
-    try:
-        os.makedirs(folder, exist_ok=True)
-    except OSError:
-        return None
-    return folder if os.access(folder, os.W_OK) else None
+    return str(_user_cache_folder("casadi"))
 
 
 _PROCESS_FOLDER: list[str] = []

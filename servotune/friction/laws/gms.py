@@ -51,9 +51,9 @@ import math
 from dataclasses import dataclass
 
 import control
-import numba
 import numpy as np
 
+from ...cache import cached_njit
 from ...structure.model import signal_name
 from ..law import FrictionLaw
 
@@ -251,7 +251,7 @@ _NAMED = {"bianchi2014": BIANCHI2014_GMS}
 
 # ---------------------------------------------------------------- the compiled element law
 
-@numba.njit(cache=True)
+@cached_njit
 def gms_rate(v, z, lam, c, fc, fs, vs, delta):
     """Return dz/dt of one element and its partial derivatives (memoryless form).
 
@@ -296,7 +296,7 @@ def gms_rate(v, z, lam, c, fc, fs, vs, delta):
     return sgn * slip, c * z * lam * ds / (dlt * dlt), -c / dlt
 
 
-@numba.njit(cache=True)
+@cached_njit
 def gms_remainder(component, v, z, p):
     """Return the remainder of one element, ``r = a0 + av v + az z - dz/dt``, and its derivatives.
 
@@ -322,7 +322,7 @@ def gms_remainder(component, v, z, p):
     return p[b + 1] + p[b + 2] * v + p[b + 3] * z - rate, p[b + 2] - d_v, p[b + 3] - d_z
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _advance(z, v, tau, lam, c, fc, fs, vs, delta):
     """z after a time tau at constant v (exact for the memoryless element law)."""
     if v == 0.0 or tau <= 0.0:
@@ -341,7 +341,7 @@ def _advance(z, v, tau, lam, c, fc, fs, vs, delta):
     return sgn * (dlt + (u - dlt) * math.exp(-c * tau / dlt))
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _march(v0, v1, h, z, lam, c, fc, fs, vs, delta, substeps):
     """Advance the element states z (in place) over an interval h whose velocity goes linearly
     from v0 to v1, in sub-steps at their mid-point velocity."""
@@ -352,7 +352,7 @@ def _march(v0, v1, h, z, lam, c, fc, fs, vs, delta, substeps):
             z[i] = _advance(z[i], v, dt, lam[i], c, fc, fs, vs, delta)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _orbit(v_mid, substeps, h, z, lam, c, fc, fs, vs, delta, max_periods, tol, out):
     """Integrate periods from z until z repeats within tol (per element); ``v_mid`` holds the
     velocity at the mid-points of the ``substeps`` sub-steps of every sample interval (step h);
@@ -390,7 +390,7 @@ def _midpoint_velocity(v: np.ndarray, substeps: int) -> np.ndarray:
     return np.fft.irfft(spec * substeps, n * substeps)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _force_kernel(v, z, lam, k, c1, sigma2, c, fc, fs, vs, delta, out):
     for j in range(v.size):
         acc = sigma2 * v[j]

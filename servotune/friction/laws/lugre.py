@@ -54,9 +54,9 @@ import math
 from dataclasses import dataclass
 
 import control
-import numba
 import numpy as np
 
+from ...cache import cached_njit
 from ...structure.model import signal_name
 from ..equivalent import describing_function
 from ..law import FrictionLaw
@@ -71,7 +71,7 @@ from ..lugre import (
 __all__ = ["LuGreFriction", "lugre_remainder", "lugre_damping_remainder"]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def lugre_remainder(v, z, p):
     """Return the LuGre remainder r = a(v) z - (c0 + c_v v + c_z z) and its partial derivatives.
 
@@ -109,7 +109,7 @@ def lugre_remainder(v, z, p):
     return r, da * z - cv, a - cz
 
 
-@numba.njit(cache=True)
+@cached_njit
 def lugre_damping_remainder(component, v, z, p):
     """Return a remainder of LuGre with micro-damping sigma1 e(v), e(v) = exp(-(v/v_d)^2).
 
