@@ -167,16 +167,18 @@ class Cutting:
         return tuple(self.feed_per_tooth * self.setup.teeth * n / 60.0 for n in self.speed_rpm)
 
 
-#: Free names beside the bounded variables: the tuned current set-point notch.
-FREE_EXTRA = ("notch",)
+#: Free names beside the bounded variables: the tuned current set-point notch and low-pass.
+FREE_EXTRA = ("notch", "lowpass")
 
 
 @dataclass(frozen=True)
 class TuningSettings:
     """``[tuning]``: which design variables are free, their bounds (SI) and the chatter weight.
 
-    ``bounds`` maps ``c`` [N s/m], ``kv`` [1/s], ``kp`` [N m s/rad] and ``ti`` [s] to
-    (low, high); absent ones take :data:`servotune.design.DEFAULT_BOUNDS`.
+    ``bounds`` maps ``c`` [N s/m], ``kv`` [1/s], ``kp`` [N m s/rad], ``ti`` [s] and
+    ``lowpass_frequency`` [rad/s] (the tuned low-pass' corner) to (low, high); absent ones take
+    :data:`servotune.design.DEFAULT_BOUNDS` (the low-pass those of
+    :class:`servotune.tuning.TuningProblem`).
     ``friction_spread`` maps fc, fs, sigma1 (fractions) and sigma0 (a factor) to the spread of
     the friction the tuning must cover (see :func:`servotune.regimes.friction_samples`);
     ``friction_samples`` are further samples ``(label, {parameter: value})``, e.g. a study's
@@ -189,8 +191,8 @@ class TuningSettings:
     Raises
     ------
     ValueError
-        Free names that are not distinct names among c, kv, kp, ti, notch; bounds that are not
-        0 < low < high; a chatter weight outside [0, 1]; a spread or samples that
+        Free names that are not distinct names among c, kv, kp, ti, notch, lowpass; bounds
+        that are not 0 < low < high; a chatter weight outside [0, 1]; a spread or samples that
         :func:`servotune.regimes.friction_samples` refuses; a variation of another parameter
         or not finite and > 0.
     """
@@ -211,9 +213,10 @@ class TuningSettings:
                              f"{(*names, *FREE_EXTRA)}, got {self.free!r}")
         object.__setattr__(self, "free", free)
         bounds = {}
+        bounded = (*names, "lowpass_frequency")
         for key, pair in dict(self.bounds).items():
-            if key not in names:
-                raise ValueError(f"TuningSettings.bounds has {key!r}; give bounds of {names}")
+            if key not in bounded:
+                raise ValueError(f"TuningSettings.bounds has {key!r}; give bounds of {bounded}")
             low, high = (positive("TuningSettings", f"bounds[{key!r}]", v) for v in pair)
             if len(tuple(pair)) != 2 or not low < high:
                 raise ValueError(f"TuningSettings.bounds[{key!r}] must be (low, high) with "
@@ -1232,7 +1235,7 @@ _BOUND_MAX = {"c": 1e12, "kv": 1e4, "kp": 1e7, "ti": 1e3}
 def _tuning(data, file) -> TuningSettings:
     names = ("c", "kv", "kp", "ti")
     table = _table(data, "tuning", file, (), ("free", "chatter_weight", "friction_spread",
-                                              *names))
+                                              "lowpass_hz", *names))
     if table is None:
         return TuningSettings()
     free = table.get("free", list(TuningSettings.free))
@@ -1241,7 +1244,8 @@ def _tuning(data, file) -> TuningSettings:
             or len(set(free)) != len(free)):
         raise _err(file, "[tuning] free", f"got {free!r}",
                    f"give a list of distinct names among {[*names, *FREE_EXTRA]} (notch: the "
-                   "current set-point notch's frequency, width and depth)")
+                   "current set-point notch's frequency, width and depth; lowpass: the corner "
+                   "of [drive.filters] lowpass_hz)")
     bounds = {}
     for key in names:
         if key in table:
@@ -1253,6 +1257,15 @@ def _tuning(data, file) -> TuningSettings:
                            "give the bounds [low, high] in SI units with 0 < low < high <= "
                            f"{_BOUND_MAX[key]:g}")
             bounds[key] = (float(b[0]), float(b[1]))
+    if "lowpass_hz" in table:
+        b = table["lowpass_hz"]
+        if (not isinstance(b, list) or len(b) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in b)
+                or not 0 < b[0] < b[1] < math.inf):
+            raise _err(file, "[tuning] lowpass_hz", f"got {b!r}",
+                       "give the bounds [low, high] of the tuned low-pass' corner in Hz with "
+                       "0 < low < high")
+        bounds["lowpass_frequency"] = (2.0 * math.pi * b[0], 2.0 * math.pi * b[1])
     weight = table.get("chatter_weight", 0.0)
     if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not 0 <= weight <= 1:
         raise _err(file, "[tuning] chatter_weight", f"got {weight!r}", "give a number in [0, 1]")

@@ -31,6 +31,7 @@ from .plant import Contact
 from .regimes import RegimeModel, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
 from .tuning import (
+    LOWPASS_VARIABLES,
     NOTCH_VARIABLES,
     ChatterTarget,
     Design,
@@ -66,6 +67,7 @@ __all__ = [
     "process_amplitude",
     "check_design",
     "start_notch",
+    "tuned_lowpass",
     "with_drive_fixed",
 ]
 
@@ -173,7 +175,7 @@ def axis_regimes(axis: Axis, c: float | None = None) -> tuple[RegimeModel, ...]:
 
 def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: float = 0.0,
                    bounds: dict | None = None, c0: float | None = None,
-                   regimes=None, notch=None) -> TuningProblem:
+                   regimes=None, notch=None, lowpass=None) -> TuningProblem:
     """Return the tuning problem of an axis.
 
     The axis' requirements are kept, except the objective band of a two-mass axis without a
@@ -186,8 +188,9 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     axis : Axis
         The axis description (needs ``[friction]``).
     free : sequence of str
-        Free variables among c, kv, kp, ti and notch (those needing a drive are dropped when
-        the axis has none; the notch's when there is no ``notch`` to tune).
+        Free variables among c, kv, kp, ti, notch and lowpass (those needing a drive are
+        dropped when the axis has none; the notch's when there is no ``notch`` to tune, the
+        low-pass' when there is no ``lowpass``).
     chatter_weight : float in [0, 1]
         Weight of the chatter limit (initial b_crit / b_crit) against the compliance peak
         (peak / initial peak); needs ``[cutting]``.
@@ -201,6 +204,9 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     notch : NotchFilter, optional
         The tuned current set-point notch (its start, e.g. :func:`start_notch`), after the
         drive's own set-point filters.
+    lowpass : LowPassFilter, optional
+        The tuned current set-point low-pass (its start, e.g. the drive's own): it replaces
+        the drive's own low-pass.
 
     Returns
     -------
@@ -223,8 +229,12 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
         axis.pads  # the clear error naming [friction]  # noqa: B018
     drive = axis.drive
     notch = notch if drive is not None else None
+    lowpass = lowpass if drive is not None else None
+    if lowpass is not None:
+        drive = dataclasses.replace(drive, lowpass=None)   # the tuned one replaces it
     free = tuple(v for v in expand_free(free) if (drive is not None or v == "c")
-                 and (notch is not None or v not in NOTCH_VARIABLES))
+                 and (notch is not None or v not in NOTCH_VARIABLES)
+                 and (lowpass is not None or v not in LOWPASS_VARIABLES))
     c0 = axis.friction.viscous if c0 is None else c0
     chatter = None
     if axis.cutting is not None:
@@ -245,6 +255,14 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
         problem_bounds.update(
             kv=b["kv"], ti=b["ti"],
             kp=b.get("kp", (kp0 * b["kp_factor"][0], kp0 * b["kp_factor"][1])))
+        # the tuned filters' bounds when given (else TuningProblem's defaults around the start)
+        problem_bounds.update({k: b[k] for k in (*NOTCH_VARIABLES, *LOWPASS_VARIABLES)
+                               if k in b})
+        if lowpass is not None and "lowpass_frequency" in b:
+            # the low-pass starts inside its bounds, as C does
+            lo, hi = b["lowpass_frequency"]
+            w0 = min(max(2.0 * math.pi * lowpass.f_hz, lo), hi)
+            lowpass = dataclasses.replace(lowpass, f_hz=w0 * HZ_PER_RAD_S)
     band = axis.requirements.band
     if drive is None and len(axis.pads) == 1 and axis.structure.n == 2:
         # a two-mass axis (layout B): the peak is sought above the first fixed point, as the
@@ -262,7 +280,7 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     return TuningProblem(axis.structure, axis.pads, c=c0, drive=drive, free=free,
                          bounds=problem_bounds, requirements=requirements, chatter=chatter,
                          weights=(1.0 - chatter_weight, chatter_weight), regimes=models,
-                         thrust=budget, notch=notch)
+                         thrust=budget, notch=notch, lowpass=lowpass)
 
 
 def start_notch(problem: TuningProblem, n_points: int = 3000):
@@ -855,7 +873,7 @@ def nonlinear_check(axis: Axis, design: Design, forces=(50.0, 600.0, 2000.0),
     from .simulate.verify import design_setup, verify_design
 
     setup = design_setup(axis_setup(axis), c=design.c, kv=design.kv, kp=design.kp,
-                         ti=design.ti, notch=design.notch)
+                         ti=design.ti, notch=design.notch, lowpass=tuned_lowpass(axis, design))
     return verify_design(setup, forces=forces, duration=duration, executor=executor)
 
 
@@ -905,10 +923,15 @@ def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
         axis = dataclasses.replace(axis, operation=dataclasses.replace(
             axis.operation, feed_speeds=tuple(float(v) for v in feed_speeds)))
     t0 = time.perf_counter()
+    lowpass = tuned_lowpass(axis, design)
     problem = tuning_problem(axis, free=("c", "kv", "kp", "ti") if axis.drive else ("c",),
-                             notch=design.notch)
+                             notch=design.notch, lowpass=lowpass)
+    own = axis.drive.lowpass if axis.drive is not None else None
     x0 = dataclasses.replace(problem.initial_design(), **(
         {} if design.notch is None else {"notch_depth": 1.0}))  # the axis' own: no notch
+    if lowpass is not None:    # the axis' own low-pass (or none)
+        x0 = dataclasses.replace(x0, lowpass_frequency=None if own is None else
+                                 2.0 * math.pi * own.f_hz)
     before = verify(problem, x0)
     after = verify(problem, design)
     current_bw = (current_loop_bandwidth(problem.drive) if problem.drive is not None else None)
@@ -923,6 +946,30 @@ def check_design(axis: Axis, design: Design, feed_speeds=None) -> TuningResult:
                                                        else current_bw * HZ_PER_RAD_S),
                             time_s=time.perf_counter() - t0),
                         checks=checks)
+
+
+def tuned_lowpass(axis: Axis, design: Design):
+    """Return a design's tuned current set-point low-pass on an axis (its corner, the damping
+    ratio of the axis' own low-pass or 1/sqrt 2), or None when the design has none.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+    design : Design
+        The design.
+
+    Returns
+    -------
+    LowPassFilter or None
+    """
+    from .drive import LowPassFilter
+
+    if design.lowpass_frequency is None or axis.drive is None:
+        return None
+    own = axis.drive.lowpass
+    return LowPassFilter(design.lowpass_frequency * HZ_PER_RAD_S,
+                         *(() if own is None else (own.damping_ratio,)))
 
 
 def _fixed_parts(drive) -> dict:
@@ -1045,13 +1092,22 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         axis = dataclasses.replace(axis, drive=d, defaults=tuple(axis.defaults)
                                    + commission_notes)
     base = tuning_problem(axis, free, chatter_weight, bounds, c0)
-    notch = None
+    notch = lowpass = None
     if base.drive is not None and set(free) & set(NOTCH_VARIABLES):
         # the tuned notch starts on the resonance that lifts the start's velocity loop
         notch, why = start_notch(base)
         axis = dataclasses.replace(axis, defaults=(*axis.defaults, why))
-        if notch is not None:
-            base = dataclasses.replace(base, notch=notch, free=free)
+    if base.drive is not None and set(free) & set(LOWPASS_VARIABLES):
+        # the tuned low-pass starts at the drive's own (the start is the design given)
+        lowpass = base.drive.lowpass
+        why = ("no low-pass tuned: the drive has none ([drive.filters] lowpass_hz gives the "
+               "tuning one to move)" if lowpass is None else
+               f"the tuned current set-point low-pass starts at the drive's own "
+               f"({lowpass.f_hz:.4g} Hz)")
+        axis = dataclasses.replace(axis, defaults=(*axis.defaults, why))
+    if notch is not None or lowpass is not None:
+        base = tuning_problem(axis, free, chatter_weight, bounds, c0, notch=notch,
+                              lowpass=lowpass)
     two_mass = _two_mass_system(axis) is not None
     if tolerance is None:
         tolerance = 1e-10 if two_mass else 1e-6
@@ -1086,7 +1142,7 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
             hi = base.bounds["c"][1]
             problem = tuning_problem(axis, free, chatter_weight,
                                      {**bounds, "c": (c_floor, hi)}, max(c_floor, base.c),
-                                     notch=notch)
+                                     notch=notch, lowpass=lowpass)
         if added:
             problem = dataclasses.replace(problem, regimes=problem.regimes + added)
         try:

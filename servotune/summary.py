@@ -138,6 +138,11 @@ def design_table(job) -> Table:
                   off(n1, _f(n1.f_hz, "{:.1f}"))),
                  ("  width, depth [-]", off(n0, f"{n0.width:.3g}, {n0.depth:.3g}" if n0 else ""),
                   off(n1, f"{n1.width:.3g}, {n1.depth:.3g}"))]
+    if d1.lowpass_frequency is not None:
+        rows.append(("tuned low-pass [Hz]",
+                     "none" if d0.lowpass_frequency is None else
+                     _f(d0.lowpass_frequency * HZ_PER_RAD_S, "{:.4g}"),
+                     _f(d1.lowpass_frequency * HZ_PER_RAD_S, "{:.4g}")))
     after = r.after
     w0 = r.before.worst_model
     w1 = None if after is None else after.worst_model
@@ -286,6 +291,7 @@ def baseline_table(job) -> Table | None:
              f"{d['velocity_kp']:.4g} N m s/rad, {d['velocity_ti'] * 1e3:.4g} ms; Kv "
              f"{d['kv']:.4g} 1/s; C {d['c']:.4g} N s/m"
              + "".join(f"; notch {n['f_hz']:.4g} Hz" for n in d.get("notches") or ())
+             + (f"; low-pass {d['lowpass']['f_hz']:.4g} Hz" if d.get("lowpass") else "")
              if all(k in d for k in ("current_kp", "velocity_kp", "kv", "c")) else
              "commissioning: servotune.baseline (technical and symmetric optimum, a notch, "
              "Kv from the hierarchy)",
@@ -329,6 +335,8 @@ def rounds_table(job) -> Table | None:
                   f"C {d.c:.4g}, Kv {d.kv:.4g}, Kp {d.kp:.4g}, Ti {d.ti * 1e3:.4g} ms"
                   + (f", notch {d.notch.f_hz:.1f} Hz (depth {d.notch.depth:.2g})"
                      if d.notch is not None and d.notch.depth < 1.0 - 1e-9 else "")
+                  + (f", low-pass {d.lowpass_frequency * HZ_PER_RAD_S:.4g} Hz"
+                     if d.lowpass_frequency is not None else "")
                   if d.kv is not None else f"C {d.c:.4g}")
         label = "screen" if r.number == 0 else str(r.number)
         rows.append((label, design, r.verdict if len(r.verdict) < 160 else

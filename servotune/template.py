@@ -189,12 +189,16 @@ depth_required = 2.0e-3             # required axial depth of cut [m]
 
 [tuning]                            # what `servotune tune` may change, and within which bounds
 free = ["c", "kv", "kp", "ti", "notch"]  # guide-way damping C, Kv, velocity-loop Kp and Ti,
-                                    # and a current set-point notch (frequency, width, depth)
+                                    # and a current set-point notch (frequency, width, depth);
+                                    # add "lowpass" to tune the corner of lowpass_hz
 # c = [5578.0, 1.0e8]               # [N s/m] axis total (default: from the guide ways' own
 #                                     viscous friction sigma2 up: damping is added, not removed)
 kv = [1.0, 300.0]                   # [1/s]
 # kp = [0.04, 370.0]                # [N m s/rad] (default: a factor 100 around the initial kp)
 ti = [1.0e-3, 0.2]                  # [s]; <= 0.2 s keeps integral action in the velocity loop
+# lowpass_hz = [200.0, 3000.0]     # [Hz] the tuned low-pass' corner, with "lowpass" in free
+#                                     (default: 1/8 to 4 x lowpass_hz, below 0.45 x the current
+#                                     controller's sample rate)
 chatter_weight = 0.0                # 0: compliance peak only; 1: chatter limit only
 # friction_spread = {{ fc = 0.3, sigma0 = 3.0 }}   # tune for the friction spread too (fractions
 #                                     for fc, fs, sigma1; a factor for sigma0)

@@ -35,7 +35,7 @@ from ._common import (
 __all__ = ["add_parser", "run", "exit_status", "EXIT_VERIFIED", "EXIT_NOT_VERIFIED",
            "EXIT_LINEAR_ONLY"]
 
-VARIABLES = ("c", "kv", "kp", "ti", "notch")
+VARIABLES = ("c", "kv", "kp", "ti", "notch", "lowpass")
 SPREAD_SAMPLES = number(1, 20, integer=True, example=4)
 EXIT_VERIFIED, EXIT_NOT_VERIFIED, EXIT_LINEAR_ONLY = 0, 1, 3
 FIGURES = ("compliance.png", "nonlinear.png", "bode.png", "lobes.png",
@@ -75,10 +75,12 @@ def add_parser(subparsers) -> None:
                     "flag, 130 interrupted.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
     p.add_argument("--free", type=_free, default=None,
-                   help="design variables the optimiser may change, among c,kv,kp,ti,notch "
-                        "(notch: the current set-point notch's frequency, width and depth, "
-                        "started on the resonance that lifts the velocity loop; default: "
-                        "[tuning] free of the axis, else c,kv,kp,ti,notch)")
+                   help="design variables the optimiser may change, among "
+                        "c,kv,kp,ti,notch,lowpass (notch: the current set-point notch's "
+                        "frequency, width and depth, started on the resonance that lifts the "
+                        "velocity loop; lowpass: the corner of the drive's own set-point "
+                        "low-pass, [drive.filters] lowpass_hz; default: [tuning] free of the "
+                        "axis, else c,kv,kp,ti,notch)")
     p.add_argument("--chatter-weight", type=FRACTION, default=None,
                    help="weight in [0, 1] of the chatter limit against the compliance peak "
                         "(default: [tuning] chatter_weight of the axis, else 0)")

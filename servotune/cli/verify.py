@@ -39,6 +39,8 @@ DESIGN_KEYS = {"c": ("N s/m", 1e12), "kv": ("1/s", 1e4), "kp": ("N m s/rad", 1e7
 #: The tuned current set-point notch's keys (optional; all three or none).
 NOTCH_KEYS = {"notch_frequency": ("rad/s", 1e7), "notch_width": ("-", 10.0),
               "notch_depth": ("-", 1.0)}
+#: The tuned current set-point low-pass' key (optional).
+LOWPASS_KEYS = {"lowpass_frequency": ("rad/s", 1e7)}
 _WANTED = ("the design must hold c [N s/m], kv [1/s], kp [N m s/rad] and ti [s] as numbers, "
            "as servotune tune writes them")
 _WHERE = "e.g. out/tune_<axis>/results.json"
@@ -112,7 +114,7 @@ def read_result(path) -> tuple[Path, dict, dict | None]:
 def _design_values(path: Path, design: dict) -> dict:
     """The four design values, each checked, with a message naming the key."""
     # tune writes a value that is not finite as null with '<key>_reason' beside it
-    keys = {**DESIGN_KEYS, **NOTCH_KEYS}
+    keys = {**DESIGN_KEYS, **NOTCH_KEYS, **LOWPASS_KEYS}
     reasons = {f"{k}_reason" for k in keys}
     unknown = [k for k in design if k not in keys and k not in reasons]
     if unknown:
@@ -131,7 +133,8 @@ def _design_values(path: Path, design: dict) -> dict:
                          "and depth")
     values = {}
     for key, (unit, high) in keys.items():
-        if key in NOTCH_KEYS and not notch:
+        if (key in NOTCH_KEYS and not notch) or (key in LOWPASS_KEYS
+                                                 and design.get(key) is None):
             continue
         value = design[key]
         where = f"{path}: design.{key}"

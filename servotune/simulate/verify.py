@@ -44,7 +44,7 @@ DEFAULT_FORCES = (50.0, 600.0, 2000.0)
 
 
 def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float | None = None,
-                 ti: float | None = None, notch=None) -> AxisSetup:
+                 ti: float | None = None, notch=None, lowpass=None) -> AxisSetup:
     """Return the axis set-up with a design's values.
 
     Parameters
@@ -61,6 +61,8 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
         Velocity-loop integral time Ti [s] (inf: no integral action).
     notch : servotune.drive.NotchFilter, optional
         A tuned current set-point notch, after the drive's own filters.
+    lowpass : servotune.drive.LowPassFilter, optional
+        A tuned current set-point low-pass, in place of the drive's own.
 
     Returns
     -------
@@ -81,7 +83,8 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
         drive, kv=drive.kv if kv is None else float(kv),
         velocity_loop=PIController(drive.velocity_loop.kp if kp is None else float(kp),
                                    drive.velocity_loop.ti if ti is None else float(ti)),
-        notches=drive.notches + (() if notch is None else (notch,)))
+        notches=drive.notches + (() if notch is None else (notch,)),
+        lowpass=drive.lowpass if lowpass is None else lowpass)
     lugre = dataclasses.replace(setup.lugre, sigma2=float(c))
     return dataclasses.replace(setup, drive=drive, lugre=lugre, viscous=float(c))
 

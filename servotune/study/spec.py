@@ -404,7 +404,8 @@ def _read_design(path: str, file) -> dict:
         raise _err(file, "[study] design", f"{path} has no 'design' with c, kv, kp, ti",
                    "name the results.json that servotune tune wrote")
     out = {k: design.get(k) for k in ("c", "kv", "kp", "ti")}
-    out.update({k: design[k] for k in ("notch_frequency", "notch_width", "notch_depth")
+    out.update({k: design[k] for k in ("notch_frequency", "notch_width", "notch_depth",
+                                       "lowpass_frequency")
                 if design.get(k) is not None})
     # the current loop and filters it was tuned with (the commissioning's, by default)
     out["drive_fixed"] = data.get("drive_fixed")

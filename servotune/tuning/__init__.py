@@ -62,6 +62,7 @@ K. J. Astrom, R. M. Murray, Feedback Systems, 2nd ed. (2021), sec 13.3 (Ms and m
 from ..requirements import Requirements
 from .ports import ResponseModel, evaluate
 from .problem import (
+    LOWPASS_VARIABLES,
     NOTCH_VARIABLES,
     ChatterTarget,
     Design,
@@ -75,6 +76,7 @@ from .solve import Prediction, TuningResult, TuningStatistics, tune
 from .verify import ModelPerformance, Performance, RequirementCheck, requirement_checks, verify
 
 __all__ = [
+    "LOWPASS_VARIABLES",
     "NOTCH_VARIABLES",
     "ChatterTarget",
     "Design",

@@ -113,6 +113,46 @@ def notch_response(design, omega, half=None, period: float = 0.0):
     return _Cx(re, 2.0 * zz * k * s * c) / _Cx(re, 2.0 * zp * k * s * c)
 
 
+def lowpass_response(design, omega, zeta: float, half=None, period: float = 0.0):
+    """The tuned current set-point low-pass' response (a :class:`_Cx`) for a numeric or
+    symbolic corner ``lowpass_frequency`` w0 [rad/s] and damping ratio ``zeta``.
+
+    Continuous (``half`` None): ``w0^2 / (w0^2 - w^2 + 2j zeta w0 w)``. Digital, as the drive
+    computes it (Tustin prewarped to w0 in the current controller's cycle T, as
+    :func:`notch_response`): with k = tan(w0 T / 2) and ``half = exp(j w T / 2) = c + j s``::
+
+        F = k^2 c^2 / (k^2 c^2 - s^2 + 2j zeta k s c)
+
+    which is 0 at the Nyquist frequency (c = 0), as Tustin's low-pass is.
+    """
+    w0 = design["lowpass_frequency"]
+    if half is None:
+        return _Cx(w0 * w0, 0.0 * omega) / _Cx(w0 * w0 - omega * omega, 2.0 * zeta * w0 * omega)
+    k = _tan(0.5 * w0 * period)
+    c, s = half.re, half.im
+    num = k * k * c * c
+    return _Cx(num, 0.0 * s) / _Cx(num - s * s, 2.0 * zeta * k * s * c)
+
+
+def _filters(problem, design, omega, half=None, period: float = 0.0):
+    """The product of the tuned set-point filters' responses (notch, low-pass), or None."""
+    out = None
+    if problem.notch is not None:
+        out = notch_response(design, omega, half, period)
+    if problem.lowpass is not None and _has(design, "lowpass_frequency"):
+        f = lowpass_response(design, omega, problem.lowpass.damping_ratio, half, period)
+        out = f if out is None else out * f
+    return out
+
+
+def _has(design, name: str) -> bool:
+    """Whether a design (a dict of numbers or casadi symbols) sets ``name``."""
+    try:
+        return design[name] is not None
+    except (KeyError, IndexError):
+        return False
+
+
 def _tan(x):
     """tan of a number or a casadi expression."""
     return x.tan() if hasattr(x, "tan") else np.tan(x)
@@ -463,8 +503,9 @@ def responses(problem: TuningProblem, data, design) -> dict:
     cv = design["kp"] * (1.0 + 1.0 / (s * design["ti"]))
     den = parts["winding"]
     a = parts["forward"] * cv
-    if problem.notch is not None:
-        a = a * notch_response(design, data.omega)
+    filters = _filters(problem, design, data.omega)
+    if filters is not None:
+        a = a * filters
     b = m.torque_constant * m.back_emf_constant
     p_phi = rc("e", "e")
     p_fb = rc("f", "e")
@@ -524,9 +565,10 @@ def _sampled_responses(problem: TuningProblem, data, design, s, rc) -> dict:
     parts, corr = data.drive, data.corrections
     h0 = parts["h0"]
     k_ct = parts["k_ct"]
-    if problem.notch is not None:
-        k_ct = k_ct * notch_response(design, data.omega, parts["half"],
-                                     problem.drive.sampling.current_period)
+    filters = _filters(problem, design, data.omega, parts["half"],
+                       problem.drive.sampling.current_period)
+    if filters is not None:
+        k_ct = k_ct * filters
     cur = cascade.current_level(h0 * plant["i_u"] + corr["a_i"],
                                 h0 * plant["phi_u"] + corr["a_phi"],
                                 h0 * plant["x_u"] + corr["a_x"], parts["k_ci"], k_ct)

@@ -5,35 +5,43 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from ..drive import Drive, NotchFilter, PIController
+from ..drive import Drive, LowPassFilter, NotchFilter, PIController
 from ..regimes import RegimeModel
 from ..requirements import Requirements
 from ..structure.model import ModalModel
 from ..thrust import ThrustBudget
 from ..validation import positive
 
-__all__ = ["NOTCH_VARIABLES", "VARIABLES", "ChatterTarget", "Design", "NoStableStartError",
-           "RequirementsNotMetError", "TuningDidNotConvergeError", "TuningProblem"]
+__all__ = ["LOWPASS_VARIABLES", "NOTCH_VARIABLES", "VARIABLES", "ChatterTarget", "Design",
+           "NoStableStartError", "RequirementsNotMetError", "TuningDidNotConvergeError",
+           "TuningProblem"]
 
-VARIABLES = ("c", "kv", "kp", "ti", "notch_frequency", "notch_width", "notch_depth")
+VARIABLES = ("c", "kv", "kp", "ti", "notch_frequency", "notch_width", "notch_depth",
+             "lowpass_frequency")
 #: The tuned current set-point notch's variables (``"notch"`` in ``free`` names all three).
 NOTCH_VARIABLES = ("notch_frequency", "notch_width", "notch_depth")
+#: The tuned current set-point low-pass's variable (``"lowpass"`` in ``free`` names it): its
+#: corner frequency; its damping ratio stays as given (1/sqrt 2 by default).
+LOWPASS_VARIABLES = ("lowpass_frequency",)
 #: The widest notch the tuner sets (relative -3 dB width, 2 zeta_p): one octave and a bit;
 #: a wider one is a low-pass's job.
 NOTCH_WIDTH_MAX = 1.0
 #: SI units of the design variables.
 UNITS = {"c": "N s/m", "kv": "1/s", "kp": "N m s/rad", "ti": "s", "notch_frequency": "rad/s",
-         "notch_width": "-", "notch_depth": "-"}
+         "notch_width": "-", "notch_depth": "-", "lowpass_frequency": "rad/s"}
+#: Shorthands of ``free``: a filter's name for its variables.
+FREE_SHORTHANDS = {"notch": NOTCH_VARIABLES, "lowpass": LOWPASS_VARIABLES}
 
 
 def expand_free(free) -> tuple[str, ...]:
-    """Return the free variables with the shorthand ``"notch"`` written out as its three
-    variables (frequency, width, depth), in order and without repeats.
+    """Return the free variables with the shorthands written out (``"notch"``: its three
+    variables, frequency, width and depth; ``"lowpass"``: its corner frequency), in order and
+    without repeats.
 
     Parameters
     ----------
     free : str or sequence of str
-        Variable names (:data:`VARIABLES` and ``"notch"``).
+        Variable names (:data:`VARIABLES`, ``"notch"`` and ``"lowpass"``).
 
     Returns
     -------
@@ -41,12 +49,12 @@ def expand_free(free) -> tuple[str, ...]:
 
     Examples
     --------
-    >>> expand_free(["c", "notch", "kv"])
-    ('c', 'notch_frequency', 'notch_width', 'notch_depth', 'kv')
+    >>> expand_free(["c", "notch", "kv", "lowpass"])
+    ('c', 'notch_frequency', 'notch_width', 'notch_depth', 'kv', 'lowpass_frequency')
     """
     out = []
     for v in ((free,) if isinstance(free, str) else free):
-        out += list(NOTCH_VARIABLES) if v == "notch" else [v]
+        out += list(FREE_SHORTHANDS.get(v, (v,)))
     return tuple(dict.fromkeys(out))
 
 
@@ -164,9 +172,10 @@ class ChatterTarget:
 @dataclass(frozen=True)
 class Design:
     """Values of the design variables (SI): C [N s/m] (axis total), Kv [1/s], Kp [N m s/rad],
-    Ti [s] and the tuned current set-point notch (:class:`~servotune.drive.NotchFilter`): its
-    frequency [rad/s], relative width and depth (gain at its frequency, in (0, 1]). Variables
-    without a drive (or without a tuned notch) may be None.
+    Ti [s], the tuned current set-point notch (:class:`~servotune.drive.NotchFilter`): its
+    frequency [rad/s], relative width and depth (gain at its frequency, in (0, 1]), and the
+    tuned set-point low-pass' corner frequency [rad/s]. Variables without a drive (or without
+    a tuned filter) may be None.
 
     Raises
     ------
@@ -189,6 +198,7 @@ class Design:
     notch_frequency: float | None = None
     notch_width: float | None = None
     notch_depth: float | None = None
+    lowpass_frequency: float | None = None
 
     def __post_init__(self) -> None:
         for name in VARIABLES:
@@ -220,12 +230,15 @@ class Design:
         -------
         dict
             ``{"c", "kv", "kp", "ti"}`` (SI; None for a variable without a drive) and, with a
-            tuned notch, ``notch_frequency`` [rad/s], ``notch_width`` and ``notch_depth``.
+            tuned notch, ``notch_frequency`` [rad/s], ``notch_width`` and ``notch_depth``; with
+            a tuned low-pass, ``lowpass_frequency`` [rad/s].
         """
         out = {"c": self.c, "kv": self.kv, "kp": self.kp, "ti": self.ti}
         if self.notch_frequency is not None:
             out.update(notch_frequency=self.notch_frequency, notch_width=self.notch_width,
                        notch_depth=self.notch_depth)
+        if self.lowpass_frequency is not None:
+            out["lowpass_frequency"] = self.lowpass_frequency
         return out
 
 
@@ -245,12 +258,13 @@ class TuningProblem:
         Initial drive (its Kv, velocity Kp and Ti are the initial gains).
     free : sequence of str
         Which of :data:`VARIABLES` the optimiser may change (``"notch"``: the tuned notch's
-        three).
+        three; ``"lowpass"``: the tuned low-pass' corner).
     bounds : dict, optional
         ``{name: (low, high)}`` in SI; defaults: a factor 100 either way of the initial value;
         for the notch: its frequency within a factor 1.5 either way (and below 0.45 times the
         current controller's sample rate), width 0.05-:data:`NOTCH_WIDTH_MAX`, depth
-        0.01-1.
+        0.01-1; for the low-pass: its corner from a factor 8 below its start up to 4 times it
+        (and below 0.45 times the current controller's sample rate).
     requirements : Requirements
         Robustness and performance requirements.
     chatter : ChatterTarget, optional
@@ -289,6 +303,10 @@ class TuningProblem:
         The tuned current set-point notch (its initial values): it follows the drive's own
         set-point filters (:meth:`drive_for`); its variables are free when ``free`` names
         them, else it stays as given.
+    lowpass : LowPassFilter, optional
+        The tuned current set-point low-pass (its start): it replaces the drive's own low-pass
+        (give the drive without one); its corner is free when ``free`` names it. A design
+        without ``lowpass_frequency`` has no low-pass.
 
     Raises
     ------
@@ -321,6 +339,7 @@ class TuningProblem:
     held: tuple[int, ...] = ()
     held_caps: tuple[float, ...] = ()
     notch: NotchFilter | None = None
+    lowpass: LowPassFilter | None = None
 
     def __post_init__(self) -> None:
         regimes = tuple(self.regimes)
@@ -342,11 +361,20 @@ class TuningProblem:
         unknown = [v for v in free if v not in VARIABLES]
         if unknown:
             raise ValueError(f"unknown design variables {unknown}; choose from {VARIABLES}")
-        if self.drive is None and (set(free) - {"c"} or self.notch is not None):
-            raise ValueError(f"free variables {sorted(set(free) - {'c'})} and a notch need a "
-                             "drive")
+        if self.drive is None and (set(free) - {"c"} or self.notch is not None
+                                   or self.lowpass is not None):
+            raise ValueError(f"free variables {sorted(set(free) - {'c'})} and tuned filters "
+                             "need a drive")
         if self.notch is not None and not isinstance(self.notch, NotchFilter):
             raise ValueError("notch must be a NotchFilter or None")
+        if self.lowpass is not None and not isinstance(self.lowpass, LowPassFilter):
+            raise ValueError("lowpass must be a LowPassFilter or None")
+        if self.lowpass is not None and self.drive is not None and self.drive.lowpass is not None:
+            raise ValueError("the tuned low-pass replaces the drive's own: give the drive "
+                             "without its low-pass (the tuned one's start)")
+        if set(free) & set(LOWPASS_VARIABLES) and self.lowpass is None:
+            raise ValueError("the low-pass' corner is free but there is no low-pass to tune "
+                             "(give TuningProblem.lowpass, its initial values)")
         if set(free) & set(NOTCH_VARIABLES) and self.notch is None:
             raise ValueError("the notch's variables are free but there is no notch to tune "
                              "(give TuningProblem.notch, its initial values)")
@@ -368,10 +396,10 @@ class TuningProblem:
             raise ValueError("a chatter weight needs a ChatterTarget (chatter=...)")
         design = self.initial_design()
         checked = {}
-        defaults = self._notch_bounds(design)
+        defaults = self._filter_bounds(design)
         for name in VARIABLES:
             value = getattr(design, name)
-            if value is None and name in NOTCH_VARIABLES:
+            if value is None and name in NOTCH_VARIABLES + LOWPASS_VARIABLES:
                 continue
             lo, hi = self.bounds.get(name, defaults.get(name) or (
                 (value / 100.0, value * 100.0) if value else (0, 0)))
@@ -381,19 +409,25 @@ class TuningProblem:
             checked[name] = (float(lo), float(hi))
         object.__setattr__(self, "bounds", checked)
 
-    def _notch_bounds(self, design: Design) -> dict:
-        """The default bounds of the notch's variables (see the class docstring)."""
-        if design.notch_frequency is None:
-            return {}
-        w0 = design.notch_frequency
-        top = 1.5 * w0
+    def _filter_bounds(self, design: Design) -> dict:
+        """The default bounds of the tuned filters' variables (see the class docstring)."""
         sampling = self.drive.sampling if self.drive is not None else None
+        nyquist = math.inf
         if sampling is not None and not sampling.is_continuous:
-            top = min(top, 0.45 * 2.0 * math.pi / sampling.current_period)
-        return {"notch_frequency": (min(w0 / 1.5, top), max(top, w0)),
-                "notch_width": (min(0.05, design.notch_width),
-                                max(NOTCH_WIDTH_MAX, design.notch_width)),
-                "notch_depth": (min(0.01, design.notch_depth), 1.0)}
+            nyquist = 0.45 * 2.0 * math.pi / sampling.current_period
+        out = {}
+        if design.notch_frequency is not None:
+            w0 = design.notch_frequency
+            top = min(1.5 * w0, nyquist)
+            out.update({"notch_frequency": (min(w0 / 1.5, top), max(top, w0)),
+                        "notch_width": (min(0.05, design.notch_width),
+                                        max(NOTCH_WIDTH_MAX, design.notch_width)),
+                        "notch_depth": (min(0.01, design.notch_depth), 1.0)})
+        if design.lowpass_frequency is not None:
+            w0 = design.lowpass_frequency
+            top = min(4.0 * w0, nyquist)
+            out["lowpass_frequency"] = (min(w0 / 8.0, top), max(top, w0))
+        return out
 
     @property
     def cutting_models(self) -> tuple[int, ...]:
@@ -429,10 +463,12 @@ class TuningProblem:
         if d is None:
             return Design(c=float(self.c))
         n = self.notch
-        notch = {} if n is None else {"notch_frequency": 2.0 * math.pi * n.f_hz,
-                                      "notch_width": n.width, "notch_depth": n.depth}
+        filters = {} if n is None else {"notch_frequency": 2.0 * math.pi * n.f_hz,
+                                        "notch_width": n.width, "notch_depth": n.depth}
+        if self.lowpass is not None:
+            filters["lowpass_frequency"] = 2.0 * math.pi * self.lowpass.f_hz
         return Design(c=float(self.c), kv=d.kv, kp=d.velocity_loop.kp, ti=d.velocity_loop.ti,
-                      **notch)
+                      **filters)
 
     def drive_for(self, design: Design) -> Drive | None:
         """Return the drive with a design's gains.
@@ -446,16 +482,38 @@ class TuningProblem:
         -------
         Drive or None
             The problem's drive with Kv and the velocity PI of the design and, when the
-            problem tunes a notch, the design's notch after the drive's own; None without a
-            drive.
+            problem tunes a notch, the design's notch after the drive's own; when it tunes a
+            low-pass, the design's (none when the design has no ``lowpass_frequency``); None
+            without a drive.
         """
         if self.drive is None:
             return None
         notches = self.drive.notches
         if self.notch is not None and design.notch is not None:
             notches = (*notches, design.notch)
-        return replace(self.drive, kv=design.kv, notches=notches,
+        lowpass = self.drive.lowpass
+        if self.lowpass is not None:
+            lowpass = self.lowpass_for(design)
+        return replace(self.drive, kv=design.kv, notches=notches, lowpass=lowpass,
                        velocity_loop=PIController(kp=design.kp, ti=design.ti))
+
+    def lowpass_for(self, design: Design) -> LowPassFilter | None:
+        """Return the tuned low-pass of a design (its corner, the problem's damping ratio), or
+        None (no tuned low-pass, or a design without ``lowpass_frequency``).
+
+        Parameters
+        ----------
+        design : Design
+            The design.
+
+        Returns
+        -------
+        LowPassFilter or None
+        """
+        if self.lowpass is None or design.lowpass_frequency is None:
+            return None
+        return LowPassFilter(design.lowpass_frequency / (2.0 * math.pi),
+                             self.lowpass.damping_ratio)
 
 
 # --------------------------------------------------------------------------------------------

@@ -44,6 +44,7 @@ from ..units import HZ_PER_RAD_S
 from .nlp import Kernels, Solution, Solver, gate_parameters
 from .ports import ResponseModel, grid, is_sampled, port_data
 from .problem import (
+    LOWPASS_VARIABLES,
     NOTCH_VARIABLES,
     Design,
     NoStableStartError,
@@ -52,6 +53,9 @@ from .problem import (
     TuningProblem,
 )
 from .verify import Performance, RequirementCheck, requirement_checks, verify
+
+#: The tuned set-point filters' variables (the closed-loop matrices' form holds at fixed ones).
+FILTER_VARIABLES = NOTCH_VARIABLES + LOWPASS_VARIABLES
 
 __all__ = ["TuningResult", "TuningStatistics", "Prediction", "StartSet", "StartsOutcome",
            "HeldModel", "held_models",
@@ -145,8 +149,9 @@ def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
                             model.contact(design.c) if problem.pads else None,
                             problem.pads).is_stable() for model in problem.regimes]
     matrices = ClosedLoopMatrices.of(problem)
-    if matrices.exact and not set(problem.free) & set(NOTCH_VARIABLES):
-        # (the form holds at the initial notch; a tuned one is built)
+    x0 = problem.initial_design()
+    if matrices.exact and all(getattr(design, v) == getattr(x0, v) for v in FILTER_VARIABLES):
+        # (the form holds at the initial set-point filters; other filters are built)
         return [frequency.is_stable_matrix(a) for a in matrices(design)]
     return [frequency.is_stable(matrices.build(model, design)) for model in problem.regimes]
 
