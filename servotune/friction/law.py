@@ -276,8 +276,10 @@ class FrictionLaw:
     def remainder(self):
         """Return the compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``.
 
-        A module-level numba function (``numba.njit(cache=True)``) of the law's module: the
-        simulation compiles its kernel around it
+        A module-level numba function of the law's module (in servotune,
+        :func:`servotune.cache.cached_njit`, which keeps its compiled code in the user's cache;
+        in another package, ``numba.njit(cache=True)`` keeps it beside that package's
+        module): the simulation compiles its kernel around it
         (:func:`servotune.simulate.integrator.chunk_kernel`).
 
         Returns
