@@ -8,6 +8,7 @@ a ``to_dict()`` for JSON (frequencies also in Hz under ``*_hz`` keys).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -16,9 +17,10 @@ import numpy as np
 
 from . import frequency
 from .axis import Axis
-from .chatter import stability_lobes
+from .chatter import compliance_matrix, oriented_frf, stability_lobes
 from .closed_loop import closed_loop
 from .drive import Drive
+from .peaks import BandPeak, ModeBand, band_peak, extreme_edge, mode_band
 from .plant import (
     Contact,
     UnstableLoopError,
@@ -40,7 +42,10 @@ __all__ = [
     "uncontrolled_compliance",
     "axis_lobes",
     "feed_compliance",
+    "chatter_minimum_edge",
     "default_omega",
+    "default_band",
+    "band_omega",
 ]
 
 
@@ -61,6 +66,69 @@ def default_omega(f_min_hz: float = 1.0, f_max_hz: float = 1000.0, n: int = 3000
         ``2 pi geomspace(f_min_hz, f_max_hz, n)`` [rad/s], shape (n,).
     """
     return 2 * math.pi * np.geomspace(f_min_hz, f_max_hz, n)
+
+
+def default_band(axis: Axis, dof: str = "wp.x") -> ModeBand:
+    """Return the default band of an axis' analyses: its requirement band, widened for its modes.
+
+    The modes that move the work piece are those of the structure in every configuration the
+    axis can be in (the guide-way pads held or free when it has ``[friction]``, the motor
+    rotor held or free when it has ``[drive]``; :meth:`~servotune.axis.Axis.configuration`,
+    as ``servotune modes`` takes them) that carry a significant share of the static
+    compliance at ``dof`` (:func:`servotune.peaks.mode_band`). The band is
+    ``[requirements] band_hz`` widened to hold each of them with the margin
+    :data:`servotune.peaks.BAND_MARGIN`.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis: its structure, requirement band and sections.
+    dof : str
+        The work-piece DOF (default ``"wp.x"``).
+
+    Returns
+    -------
+    servotune.peaks.ModeBand
+        The band [rad/s], the requirement band and the modes; its
+        :meth:`~servotune.peaks.ModeBand.note` says it in one line.
+
+    See Also
+    --------
+    compliance_curve : the compliance over a band.
+    """
+    pads = ("locked", "free") if axis.friction is not None else ("free",)
+    motor = ("locked", "free") if axis.drive is not None else ("free",)
+    models = [axis.configuration(pads=p, motor=m) for p in pads for m in motor]
+    return mode_band(axis.requirements.band, models, dof)
+
+
+def band_omega(band, per_decade: int = 1000, f_min_hz: float = 1.0,
+               f_max_hz: float = 1000.0) -> np.ndarray:
+    """Return a log-spaced grid [rad/s] that covers a band and 1 Hz to 1 kHz.
+
+    Parameters
+    ----------
+    band : (float, float)
+        The band [rad/s] the grid must cover.
+    per_decade : int
+        Points per decade.
+    f_min_hz, f_max_hz : float
+        The grid covers at least this range [Hz] (the default grid of
+        :func:`compliance_curve`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``2 pi geomspace(lo, hi, n)`` [rad/s] with ``lo <= f_min_hz``, ``hi >= f_max_hz``, and
+        the band's ends themselves, so that the band's first and last samples are its ends.
+    """
+    lo = min(f_min_hz, band[0] * HZ_PER_RAD_S)
+    hi = max(f_max_hz, band[1] * HZ_PER_RAD_S)
+    n = max(3, math.ceil(per_decade * math.log10(hi / lo)))
+    grid = default_omega(lo, hi, n)
+    ends = np.array([float(band[0]), float(band[1])])
+    near = np.any(np.abs(grid[:, None] / ends[None, :] - 1) < 1e-6, axis=1)
+    return np.union1d(grid[~near], ends)
 
 
 def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
@@ -207,11 +275,36 @@ class LoopReport:
         dict
             ``contact`` (the kind), ``contact_note``, and ``velocity_loop``,
             ``position_loop`` as :meth:`LoopAnalysis.to_dict
-            <servotune.frequency.LoopAnalysis.to_dict>` gives them (no frequency responses).
+            <servotune.frequency.LoopAnalysis.to_dict>` gives them (no frequency responses),
+            each with ``ms_at_band_edge`` (:meth:`ms_edge`) and ``band_hz``, the grid's ends.
         """
+        band = [float(self.omega[0]) * HZ_PER_RAD_S, float(self.omega[-1]) * HZ_PER_RAD_S]
         return {"contact": self.contact.kind, "contact_note": self.contact.note,
-                "velocity_loop": self.velocity.to_dict(),
-                "position_loop": self.position.to_dict()}
+                "velocity_loop": dict(self.velocity.to_dict(),
+                                      ms_at_band_edge=self.ms_edge("velocity"), band_hz=band),
+                "position_loop": dict(self.position.to_dict(),
+                                      ms_at_band_edge=self.ms_edge("position"), band_hz=band)}
+
+    def ms_edge(self, loop: str) -> str | None:
+        """Return whether a loop's sensitivity peak Ms lies at an edge of the frequency grid.
+
+        By the rule of :func:`servotune.peaks.extreme_edge` on |1/(1 + L)|: at the grid's first
+        or last point the largest value is no peak (the sensitivity still rises beyond);
+        a sampled loop's values beyond its Nyquist frequency (NaN) are left out.
+
+        Parameters
+        ----------
+        loop : {"velocity", "position"}
+            The loop.
+
+        Returns
+        -------
+        str or None
+            ``"low"``, ``"high"`` or None (inside the grid).
+        """
+        l_loop = {"velocity": self.l_velocity, "position": self.l_position}[loop]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return extreme_edge(np.abs(1.0 / (1.0 + np.asarray(l_loop))))
 
     def plot(self, title: str = "Loop transfer functions"):
         """Return the Bode diagram of both loops with their margins marked.
@@ -298,7 +391,7 @@ def loop_report(axis: Axis, contact: Contact, drive: Drive | None = None,
 
 @dataclass(frozen=True)
 class ComplianceCurve:
-    """A work-piece compliance curve and its peak (SI).
+    """A work-piece compliance curve and its largest value over a band (SI).
 
     Attributes
     ----------
@@ -310,11 +403,15 @@ class ComplianceCurve:
         Complex compliance [m/N], shape (K,).
     peak_compliance : float
         Largest |compliance| within ``band`` [m/N], refined between grid points
-        (:func:`servotune.frequency.peak`).
+        (:func:`servotune.frequency.peak`); a resonance only when :attr:`edge` is None.
     peak_frequency : float
         Where it occurs [rad/s].
     band : tuple of float, optional
         The band the peak was sought in [rad/s].
+    band_peak : servotune.peaks.BandPeak, optional
+        The largest value by the rule of :mod:`servotune.peaks`: whether it lies at an edge
+        of the band (then it is no resonance), the largest resonance inside, a rigid-body
+        mode.
     """
 
     label: str
@@ -323,15 +420,18 @@ class ComplianceCurve:
     peak_compliance: float
     peak_frequency: float
     band: tuple[float, float] | None = None     # where the peak was sought [rad/s]
+    band_peak: BandPeak | None = None
+
+    @property
+    def edge(self) -> str | None:
+        """``"low"`` or ``"high"`` when the largest value is at that edge of the band (no
+        resonance: the response still rises there), None when it lies inside."""
+        return None if self.band_peak is None else self.band_peak.edge
 
     @property
     def at_edge(self) -> bool:
-        """The peak lies at an edge of its band (within 3 % in frequency): the largest value
-        there, not a resonance; the true peak may lie outside the band."""
-        if self.band is None or not np.isfinite(self.peak_frequency):
-            return False
-        lo, hi = self.band
-        return bool(self.peak_frequency <= lo * 1.03 or self.peak_frequency >= hi / 1.03)
+        """Whether the largest value is at an edge of the band (:attr:`edge`)."""
+        return self.edge is not None
 
     def to_dict(self) -> dict:
         """Return the peak JSON-ready.
@@ -339,12 +439,19 @@ class ComplianceCurve:
         Returns
         -------
         dict
-            ``label``, ``peak_compliance`` [m/N], ``peak_frequency_hz`` [Hz] and
-            ``peak_at_edge`` (:attr:`at_edge`); the curve itself is left out.
+            ``label``, ``peak_compliance`` [m/N] and ``peak_frequency_hz`` [Hz] (the
+            resonance: None when the largest value is at an edge of the band), and the keys
+            of :meth:`servotune.peaks.BandPeak.to_dict` (``peak_at_band_edge``,
+            ``largest_compliance``, ``largest_at_hz``, ``resonance_hz``, ...); the curve
+            itself is left out.
         """
-        return {"label": self.label, "peak_compliance": self.peak_compliance,
-                "peak_frequency_hz": self.peak_frequency * HZ_PER_RAD_S,
-                "peak_at_edge": self.at_edge}
+        out = {"label": self.label}
+        if self.band_peak is None:
+            return dict(out, peak_compliance=self.peak_compliance,
+                        peak_frequency_hz=self.peak_frequency * HZ_PER_RAD_S,
+                        peak_at_band_edge=None)
+        data = self.band_peak.to_dict("compliance")
+        return {**out, **data, "peak_frequency_hz": data["resonance_hz"]}
 
 
 def _in_band(omega: np.ndarray, band) -> np.ndarray:
@@ -360,22 +467,40 @@ def _in_band(omega: np.ndarray, band) -> np.ndarray:
     return sel
 
 
-def _curve(label, model, omega, band) -> ComplianceCurve:
+def _refine(omega, magnitude):
+    value, where = frequency.peak(omega, magnitude)
+    return where, value
+
+
+def _rigid_body(model) -> bool:
+    """Whether a continuous model has a pole at the origin (a rigid-body mode)."""
+    plant = getattr(model, "plant", None)
+    if plant is None:
+        return False
+    poles = np.abs(np.asarray(control.ss(plant).poles()))
+    return bool(poles.size and np.any(poles <= 1e-6 * poles.max()))
+
+
+def _curve(label, model, omega, band, controlled=True) -> ComplianceCurve:
     sel = _in_band(omega, band)
     model.require_stable()
     values = model.compliance(omega)[0]
-    value, where = frequency.peak(omega[sel], values[sel])
-    return ComplianceCurve(label, omega, values, value, where, (float(band[0]), float(band[1])))
+    found = band_peak(omega[sel], values[sel], refine=_refine, unit="m/N")
+    if found.edge == "low" and not controlled and _rigid_body(model):
+        found = dataclasses.replace(found, rigid_body=True)
+    return ComplianceCurve(label, omega, values, found.largest, found.largest_frequency,
+                           (float(band[0]), float(band[1])), found)
 
 
 def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, omega=None,
-                     label: str | None = None, controlled: bool | None = None
-                     ) -> ComplianceCurve:
+                     label: str | None = None, controlled: bool | None = None,
+                     band=None) -> ComplianceCurve:
     """Return the work-piece X compliance of an axis with a contact model, and its peak.
 
     Closed loop when the axis has a drive (or ``drive`` is given, or ``controlled`` says so);
-    the peak is taken over the axis' requirement band (``[requirements] band_hz``, default
-    5 to 300 Hz).
+    the peak is taken over ``band``, by default the axis' requirement band
+    (``[requirements] band_hz``, default 5 to 300 Hz). A largest value at an edge of the band
+    is flagged and is no resonance (:mod:`servotune.peaks`).
 
     Parameters
     ----------
@@ -392,6 +517,9 @@ def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, o
         Name of the curve (default: the contact's note, else its kind).
     controlled : bool, optional
         With or without motion control (default: with, when there is a drive).
+    band : (float, float), optional
+        The band [rad/s] of the peak (default the requirement band; :func:`default_band`
+        widens it to hold the work-piece modes).
 
     Returns
     -------
@@ -416,14 +544,16 @@ def compliance_curve(axis: Axis, contact: Contact, drive: Drive | None = None, o
         contact.
     """
     omega = default_omega() if omega is None else np.asarray(omega, float)
+    band = axis.requirements.band if band is None else band
     if controlled is None:
         controlled = drive is not None or axis.drive is not None
-    _in_band(omega, axis.requirements.band)
+    _in_band(omega, band)
     model = axis_loop(axis, contact, drive, controlled=controlled)
-    return _curve(label or contact.note or contact.kind, model, omega, axis.requirements.band)
+    return _curve(label or contact.note or contact.kind, model, omega, band, controlled)
 
 
-def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[ComplianceCurve]:
+def uncontrolled_compliance(axis: Axis, c_values, omega=None, band=None
+                            ) -> list[ComplianceCurve]:
     """Return the paper's Fig 9: the work-piece compliance with viscous damping C, no control.
 
     Without motion control the axis is free to move (a rigid-body pole at the origin, which
@@ -437,11 +567,15 @@ def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[Compliance
         Total viscous damping values C [N s/m], finite and >= 0.
     omega : array_like, optional
         Angular frequencies [rad/s] (default 1 Hz to 1 kHz, 3000 points, log-spaced).
+    band : (float, float), optional
+        The band [rad/s] of the peaks (default the requirement band). The rigid-body mode
+        makes the compliance rise towards 0 Hz: where that is the largest value in the band,
+        the curve says so (:attr:`ComplianceCurve.band_peak`).
 
     Returns
     -------
     list of ComplianceCurve
-        One per C, labelled ``"C = 5e+05 N s/m"``, peak in the requirement band.
+        One per C, labelled ``"C = 5e+05 N s/m"``, peak in the band.
 
     Raises
     ------
@@ -449,11 +583,12 @@ def uncontrolled_compliance(axis: Axis, c_values, omega=None) -> list[Compliance
         A negative C, an axis without ``[friction]``, or no point of ``omega`` in the band.
     """
     omega = default_omega() if omega is None else np.asarray(omega, float)
-    _in_band(omega, axis.requirements.band)
+    band = axis.requirements.band if band is None else band
+    _in_band(omega, band)
     curves = []
     for c in c_values:
         model = axis_loop(axis, Contact.viscous(c), controlled=False)
-        curves.append(_curve(f"C = {c:.0e} N s/m", model, omega, axis.requirements.band))
+        curves.append(_curve(f"C = {c:.0e} N s/m", model, omega, band, controlled=False))
     return curves
 
 
@@ -537,3 +672,36 @@ def axis_lobes(axis: Axis, contact: Contact, drive: Drive | None = None, omega=N
     frd = feed_compliance(axis, contact, drive, omega)
     speeds = np.linspace(*cutting.speed_rpm, n_speeds)
     return stability_lobes(frd, cutting.setup, speeds, direction=cutting.direction)
+
+
+def chatter_minimum_edge(system, setup, direction: str = "x", omega=None) -> str | None:
+    """Return whether the minimum of Re G of chatter lies at an edge of the frequency grid.
+
+    The absolute stability limit b_crit comes from the most negative real part of the
+    oriented transfer function (:func:`servotune.chatter.oriented_frf`). At the grid's first
+    or last frequency (:func:`servotune.peaks.extreme_edge`) that minimum is the value at the
+    edge, not the chatter resonance: the real part still falls beyond, and b_crit is not a
+    limit found inside the grid.
+
+    Parameters
+    ----------
+    system : control.StateSpace, control.FrequencyResponseData or (omega, H)
+        The compliance, as :func:`servotune.chatter.stability_lobes` takes it.
+    setup : servotune.chatter.MillingSetup
+        The milling set-up.
+    direction : {"x", "y"}
+        Flexible direction of a SISO compliance.
+    omega : array_like, optional
+        The frequency grid [rad/s] (default: the one the lobes use).
+
+    Returns
+    -------
+    str or None
+        ``"low"``, ``"high"`` or None (the minimum lies inside the grid).
+
+    See Also
+    --------
+    axis_lobes : the lobes of an axis.
+    """
+    _, g = compliance_matrix(system, omega, direction)
+    return extreme_edge(oriented_frf(g, setup).real.min(axis=1), minimum=True)

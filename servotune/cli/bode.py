@@ -40,7 +40,9 @@ def add_parser(subparsers) -> None:
         description="Bode diagram of the velocity loop (opened at the motor-speed feedback, "
                     "position loop open) and of the position loop (opened at the position "
                     "feedback, velocity loop closed); gain and phase margins, sensitivity peak "
-                    "Ms and closed-loop bandwidth of each.")
+                    "Ms and closed-loop bandwidth of each. An Ms at the first or last "
+                    "frequency of the grid is flagged (ms_at_band_edge): the largest value "
+                    "there is no peak, the sensitivity still rises beyond.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
     add_contact_options(p, default="viscous")
     add_common_options(p, plots=True)
@@ -103,6 +105,14 @@ def run(args) -> int:
         low = "-" if a["gain_margin_lower_db"] is None else f"{a['gain_margin_lower_db']:.1f}"
         print(f"  {name:10} {a['phase_margin_deg']:9.1f} {gm:>8} {low:>14} {a['ms']:6.2f} "
               f"{a['crossover_hz']:15.2f} {a['bandwidth_hz']:15.2f}")
+    for name in ("velocity", "position"):
+        a = out[f"{name}_loop"]
+        if a["ms_at_band_edge"] is not None:
+            side = "lower" if a["ms_at_band_edge"] == "low" else "upper"
+            lo, hi = a["band_hz"]
+            print(f"  {name} loop: Ms {a['ms']:.2f} is the largest sensitivity at the grid's "
+                  f"{side} edge {a['ms_frequency_hz']:.4g} Hz, not a peak found inside "
+                  f"{lo:.4g}-{hi:.4g} Hz: the sensitivity still rises there")
     for line in checks.warnings:
         print(f"  WARNING: {line}")
     print(f"  wrote {run.path}")

@@ -1,9 +1,15 @@
-"""``servotune compliance``: work-piece compliance of an axis with a guide-way contact model."""
+"""``servotune compliance``: work-piece compliance of an axis with a guide-way contact model.
+
+The peak is sought over the axis' requirement band widened to hold the structure's work-piece
+modes (:func:`servotune.analysis.default_band`); a largest value at the band's first or last
+frequency is no resonance (:mod:`servotune.peaks`), and the output says so.
+"""
 
 from __future__ import annotations
 
 from ..units import HZ_PER_RAD_S
 from ._common import (
+    CliError,
     RunOutput,
     add_common_options,
     add_contact_options,
@@ -11,6 +17,7 @@ from ._common import (
     check_contact_args,
     contact_from_args,
     default_notes,
+    number,
     print_json,
     save_figure,
     write_results,
@@ -19,6 +26,7 @@ from ._common import (
 __all__ = ["add_parser", "run"]
 
 FIG9_C = (5e3, 5e4, 5e5, 5e6, 5e7)  # the paper's Fig 9 [N s/m]
+FREQUENCY = number(0.0, 1e4, low_open=True, example=10, unit="Hz")
 
 
 def add_parser(subparsers) -> None:
@@ -34,10 +42,18 @@ def add_parser(subparsers) -> None:
         description="Closed-loop work-piece X compliance x/F with the chosen guide-way model, "
                     "beside locked and free pads; and the paper's Fig 9: the compliance with "
                     "viscous guide-way damping C = 5e3 ... 5e7 N s/m and no motion control. "
-                    "The peak is taken over [requirements] band_hz. Without [drive] the "
+                    "The peak is taken over [requirements] band_hz, widened to hold the "
+                    "modes that move the work piece (x1.3 margin), or over --f-start-hz to "
+                    "--f-end-hz; a largest value at the band's edge is flagged, not reported "
+                    "as a resonance. Without [drive] the "
                     "compliance is that of the structure without motion control; without "
                     "[friction] there is no Fig 9.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
+    p.add_argument("--f-start-hz", type=FREQUENCY, default=None,
+                   help="start of the band of the peak [Hz] (default: [requirements] band_hz, "
+                        "widened to hold the work-piece modes with x1.3 margin)")
+    p.add_argument("--f-end-hz", type=FREQUENCY, default=None,
+                   help="end of the band of the peak [Hz] (default: as --f-start-hz)")
     add_contact_options(p, default="viscous")
     add_common_options(p, plots=True)
     p.set_defaults(func=run)
@@ -63,13 +79,21 @@ def run(args) -> int:
     with progress.task(f"loading {args.axis}"):
         from .. import analysis
         from ..axis import load_axis
+        from ..peaks import chosen_band
         from ..plant import Contact
 
         axis = axis_from_args(load_axis(args.axis), args)
     contact = contact_from_args(axis, args)
     controlled = axis.drive is not None
     fig9 = axis.friction is not None
-    notes = default_notes(axis)
+    default = analysis.default_band(axis)
+    try:
+        band, band_note = chosen_band(default, args.f_start_hz, args.f_end_hz)
+    except ValueError as exc:
+        raise CliError(f"{exc} (--f-start-hz, --f-end-hz; an end not given is the default "
+                       f"band's, {default.band_hz[0]:.4g}-{default.band_hz[1]:.4g} Hz)") from None
+    omega = analysis.band_omega(band)
+    notes = [*default_notes(axis), band_note]
     if not controlled:
         notes.append("no [drive] section: the compliance of the structure without motion "
                      "control")
@@ -83,15 +107,15 @@ def run(args) -> int:
         for c in [contact] + [x for x in (Contact.locked(), Contact.free())
                               if x.kind != contact.kind and axis.friction is not None]:
             if controlled or c.pads != "free":  # uncontrolled free pads: no static stiffness
-                curves.append(analysis.compliance_curve(axis, c))
+                curves.append(analysis.compliance_curve(axis, c, omega=omega, band=band))
         if fig9:
-            fig9_curves = analysis.uncontrolled_compliance(axis, FIG9_C)
+            fig9_curves = analysis.uncontrolled_compliance(axis, FIG9_C, omega=omega, band=band)
     main = curves[0]
+    first = main.to_dict()
+    del first["label"]
     out = {"axis": axis.name, "contact": contact.kind, "contact_note": contact.note,
-           "controlled": controlled, "notes": notes,
-           "peak_compliance": main.peak_compliance,
-           "peak_frequency_hz": main.peak_frequency * HZ_PER_RAD_S,
-           "peak_at_edge": main.at_edge,
+           "controlled": controlled, "notes": notes, **first,
+           "default_band": default.to_dict(),
            "curves": [c.to_dict() for c in curves],
            "fig9": [dict(c.to_dict(), c=cv) for c, cv in zip(fig9_curves, FIG9_C, strict=False)],
            "folder": str(run.path), "figures": [str(run.file(n)) for n in names]}
@@ -104,7 +128,9 @@ def run(args) -> int:
                 title=f"{axis.name}: work-piece X compliance"
                       + (" (closed loop)" if controlled else " (no control)"),
                 marks=[(f"{main.peak_compliance:.3g} m/N at "
-                        f"{main.peak_frequency * HZ_PER_RAD_S:.1f} Hz",
+                        f"{main.peak_frequency * HZ_PER_RAD_S:.1f} Hz"
+                        + ("" if main.edge is None else
+                           f" (the band's {main.edge} edge: no resonance)"),
                         main.peak_frequency, main.peak_compliance)]), folder / names[0])
         if names and fig9:
             save_figure(plot_compliance(
@@ -118,15 +144,11 @@ def run(args) -> int:
     print(f"{axis.name}: work-piece X compliance" + (" (closed loop)" if controlled else ""))
     for note in notes:
         print(f"  note: {note}")
+    widen = {"widen_low": "widen the band (--f-start-hz)",
+             "widen_high": "widen the band (--f-end-hz)"}
     for c in curves:
-        print(f"  {c.label:55} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * HZ_PER_RAD_S:.2f} Hz"
-              + (f"  AT THE BAND EDGE ({c.band[0] * HZ_PER_RAD_S:g}-"
-                 f"{c.band[1] * HZ_PER_RAD_S:g} Hz): the largest "
-                 "value there, not a resonance; widen [requirements] band_hz to find the peak"
-                 if c.at_edge else ""))
+        print(f"  {c.label:55} {c.band_peak.describe(**widen)}")
     for c in fig9_curves:
-        print(f"  no control, {c.label:43} peak {c.peak_compliance:.4g} m/N at "
-              f"{c.peak_frequency * HZ_PER_RAD_S:.2f} Hz")
+        print(f"  no control, {c.label:43} {c.band_peak.describe(**widen)}")
     print(f"  wrote {run.path}")
     return 0

@@ -236,8 +236,14 @@ def run(args) -> int:
             shown = [result, zoa]
         else:
             result, shown = zoa, [zoa]
+    from ..analysis import chatter_minimum_edge
+
+    edge = chatter_minimum_edge(system, setup, args.direction)
     out = result.to_dict()
     out["compliance"] = source
+    out["min_re_g_at_band_edge"] = edge
+    if edge is not None:
+        out["critical_frequency_hz"] = None     # the grid's edge, not a chatter resonance
     if args.method == "sdm":
         out["zoa_b_crit_m"] = zoa.b_crit
         out["zoa_critical_speed_rpm"] = zoa.critical_speed_rpm
@@ -266,9 +272,17 @@ def run(args) -> int:
     print(f"  speeds              : {result.speed_rpm[0]:.0f} .. {result.speed_rpm[-1]:.0f} rpm "
           f"({result.speed_rpm.size})")
     print(f"  b_crit              : {result.b_crit / MM:.4f} mm")
+    if edge is not None:
+        side = "lower" if edge == "low" else "upper"
+        print(f"  WARNING: the most negative Re G is at the {side} edge of the compliance's "
+              f"frequency grid ({zoa.critical_frequency * HZ_PER_RAD_S:.4g} Hz): no chatter "
+              "resonance found inside it; Re G still falls beyond, so b_crit is not a limit; "
+              "give the compliance over a wider band")
     print(f"  critical speed      : {result.critical_speed_rpm:.1f} rpm")
     if args.method == "zoa":
-        print(f"  chatter frequency   : {result.critical_frequency * HZ_PER_RAD_S:.1f} Hz")
+        print("  chatter frequency   : " + (
+            f"{result.critical_frequency * HZ_PER_RAD_S:.1f} Hz" if edge is None
+            else "none found inside the grid"))
     else:
         print(f"  zero-order b_crit   : {zoa.b_crit / MM:.4f} mm "
               f"at {zoa.critical_speed_rpm:.1f} rpm")

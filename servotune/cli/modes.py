@@ -5,6 +5,11 @@ work-piece X DOF: phi_j(wp.x)^2 / omega_j^2 over the sum of the same for every f
 (phi mass-normalised). The shares add up to 1; rigid-body modes get 0. The mode with the
 largest share is the one that moves the work piece in X.
 
+The peak work-piece X compliance is sought over the axis' requirement band widened to hold the
+modes that move the work piece (:func:`servotune.analysis.default_band`); a largest value at the
+band's first or last frequency is no resonance and is reported as such (:mod:`servotune.peaks`).
+A rigid-body mode that moves the work piece has no peak in any band: the output says so.
+
 When the structure is a reduced model whose kept fixed-interface modes do not cover the
 requirements' band with the margin (``servotune.model_checks.band_coverage``), a warning that
 names the band, the frequency reached and the fix goes to standard error (and into the JSON
@@ -47,7 +52,9 @@ def add_parser(subparsers) -> None:
                     "flexible modes (phi mass-normalised), i.e. the mode's part of the static "
                     "compliance at wp.x; shares add up to 1, rigid-body modes get 0. Also the "
                     "peak work-piece X compliance over [requirements] band_hz (default "
-                    "5-300 Hz) when the configuration has no rigid-body mode.")
+                    "5-300 Hz) widened to hold the work-piece modes (x1.3 margin), when no "
+                    "rigid-body mode moves the work piece; a largest value at the band's edge "
+                    "is flagged, not reported as a resonance.")
     p.add_argument("axis", help="axis folder with axis.toml (e.g. models/paper_x_axis)")
     p.add_argument("--pads", choices=("locked", "free"), default="free",
                    help="guide-way pads held (stiction at standstill) or free (default free)")
@@ -76,8 +83,10 @@ def run(args) -> int:
     from .. import progress
 
     with progress.task(f"loading {args.axis}"):
+        from ..analysis import default_band
         from ..axis import load_axis
         from ..model_checks import band_coverage
+        from ..peaks import rigid_body_moves, structure_peak
 
         axis = load_axis(args.axis)
     out = RunOutput.for_args(args, "modes", axis.name, ["results.json"])
@@ -92,11 +101,10 @@ def run(args) -> int:
         share = model.participation(WP_X)
     j = int(share.argmax())
     rigid = int((omega == 0).sum())
-    band = axis.requirements.band
-    peak = None
-    if rigid == 0:
-        w_peak, value = model.compliance_peak(WP_X, band[0], band[1])
-        peak = {"wp_x_peak_compliance": value, "wp_x_peak_hz": w_peak * HZ_PER_RAD_S}
+    default = default_band(axis)
+    band = default.band
+    rigid_wp = rigid_body_moves(model, WP_X)
+    peak = None if rigid_wp else structure_peak(model, WP_X, band)
     result = {
         "axis": axis.name, "pads": args.pads, "motor": args.motor, "n_dofs": model.n,
         "frequencies_hz": (omega * HZ_PER_RAD_S).tolist(),
@@ -104,10 +112,17 @@ def run(args) -> int:
         "wp_x_participation": share.tolist(),
         "wp_x_mode": j + 1, "wp_x_mode_hz": float(omega[j] * HZ_PER_RAD_S),
         "rigid_body_modes": rigid,
-        "wp_x_peak_compliance": None if peak is None else peak["wp_x_peak_compliance"],
-        "wp_x_peak_hz": None if peak is None else peak["wp_x_peak_hz"],
+        "wp_x_peak_compliance": None if peak is None else peak.peak,
+        "wp_x_peak_hz": (None if peak is None or peak.resonance is None
+                         else peak.resonance * HZ_PER_RAD_S),
+        "wp_x_peak_at_band_edge": None if peak is None else peak.edge,
+        "wp_x_largest_compliance": None if peak is None else peak.largest,
+        "wp_x_largest_at_hz": (None if peak is None
+                               else peak.largest_frequency * HZ_PER_RAD_S),
+        "wp_x_rigid_body_mode": rigid_wp,
         "band_hz": [band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S],
-        "notes": default_notes(axis),
+        "default_band": default.to_dict(),
+        "notes": [*default_notes(axis), default.note()],
         "folder": str(out.path),
         "band_coverage": coverage.to_dict(),
         "warnings": warnings,
@@ -128,12 +143,21 @@ def run(args) -> int:
     print(f"  work-piece X mode: {omega[j] * HZ_PER_RAD_S:.2f} Hz "
           f"({100 * share[j]:.1f} % of the static "
           "compliance at wp.x)")
-    if peak is not None:
-        lo, hi = band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S
-        print(f"  peak wp.x compliance: {peak['wp_x_peak_compliance']:.3e} m/N at "
-              f"{peak['wp_x_peak_hz']:.2f} Hz ({lo:g}-{hi:g} Hz)")
-    for note in result["notes"]:
+    lo, hi = band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S
+    if peak is not None and peak.edge is None:
+        print(f"  peak wp.x compliance: {peak.peak:.3e} m/N at "
+              f"{peak.resonance * HZ_PER_RAD_S:.2f} Hz ({lo:g}-{hi:g} Hz)")
+    elif peak is not None:
+        print("  wp.x compliance: " + peak.describe(
+            widen_low="widen [requirements] band_hz below",
+            widen_high="widen [requirements] band_hz above"))
+    else:
+        print("  no peak wp.x compliance: a rigid-body mode (0 Hz) moves the work piece "
+              f"(pads {args.pads}, motor {args.motor}); its compliance grows without bound "
+              "towards 0 Hz and no band can hold it")
+    for note in default_notes(axis):
         print(f"  default taken: {note}")
+    print(f"  note: {default.note()}")
     if coverage.reduced:
         print(f"  {'WARNING: ' if not coverage.covered else ''}{coverage.message}")
     print(f"  wrote {out.path}")

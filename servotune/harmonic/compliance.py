@@ -32,6 +32,7 @@ import numpy as np
 from ..blas import one_thread
 from ..closed_loop import axis_compliance
 from ..friction.lugre import sliding_linearisation
+from ..peaks import BandPeak, band_peak, parabola_peak
 from ..plant import Contact
 from ..units import HZ_PER_RAD_S
 from .aft import samples_from_harmonics
@@ -50,7 +51,9 @@ def curve_peak(omega, compliance) -> tuple[float, float, int]:
 
     A parabola through the largest sample and its two neighbours places the peak between
     them, when the three frequencies increase, the parabola opens downwards and its vertex
-    lies between the neighbours; otherwise the largest sample is the peak.
+    lies between the neighbours; otherwise the largest sample is the peak
+    (:func:`servotune.peaks.parabola_peak`). Whether that is a resonance or the value at an
+    edge of the band, :func:`servotune.peaks.band_peak` says.
 
     Parameters
     ----------
@@ -68,16 +71,7 @@ def curve_peak(omega, compliance) -> tuple[float, float, int]:
     index : int
         Index of the largest sample.
     """
-    w = np.asarray(omega, dtype=float)
-    c = np.asarray(compliance, dtype=float)
-    i = int(np.argmax(c))
-    if 0 < i < c.size - 1 and w[i - 1] < w[i] < w[i + 1]:
-        c2, c1, c0 = np.polyfit(w[i - 1:i + 2] - w[i], c[i - 1:i + 2], 2)
-        if c2 < 0:
-            dx = -c1 / (2 * c2)
-            if w[i - 1] - w[i] <= dx <= w[i + 1] - w[i]:
-                return float(w[i] + dx), float(c0 - c1 * c1 / (4 * c2)), i
-    return float(w[i]), float(c[i]), i
+    return parabola_peak(omega, compliance)
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,9 +89,10 @@ class ComplianceCurve:
     pad_amplitude : numpy.ndarray
         Half the peak-to-peak pad displacement (largest pad, all harmonics) [m].
     resonance : float
-        Frequency of the compliance peak [rad/s] (:func:`curve_peak`).
+        Frequency of the largest compliance [rad/s] (:func:`curve_peak`); a resonance only
+        when it lies inside the band (:attr:`band_peak`).
     peak : float
-        The compliance peak [m/N] (:func:`curve_peak`).
+        The largest compliance [m/N] (:func:`curve_peak`).
     pad_amplitude_at_peak : float
         Pad amplitude at the largest point of the curve [m].
     harmonics : int
@@ -119,19 +114,27 @@ class ComplianceCurve:
     newton_iterations: int
     wall_time: float
 
+    @property
+    def band_peak(self) -> BandPeak:
+        """The largest compliance over the curve's band and whether it is a resonance
+        (:func:`servotune.peaks.band_peak`: at the first or last frequency it is not)."""
+        return band_peak(self.omega, self.compliance, unit="m/N")
+
     def to_dict(self) -> dict:
         """Return the curve as JSON-ready values (SI, Hz in ``_hz`` names).
 
         Returns
         -------
         dict
-            The scalars (``force_pp_n``, ``resonance_hz``, ``peak_compliance_m_per_n``,
-            ``pad_amplitude_at_peak_m``, ``harmonics``, ``points``, ``newton_iterations``,
+            The scalars (``force_pp_n``; ``resonance_hz`` and ``peak_compliance_m_per_n``,
+            None when the largest value is at an edge of the band; ``peak_at_band_edge``,
+            ``largest_compliance_m_per_n``, ``largest_at_hz`` and the other keys of
+            :meth:`servotune.peaks.BandPeak.to_dict`; ``pad_amplitude_at_peak_m`` (at the
+            largest value), ``harmonics``, ``points``, ``newton_iterations``,
             ``wall_time_s``) and the lists ``frequency_hz``, ``compliance_m_per_n`` and
             ``pad_amplitude_m``.
         """
-        return {"force_pp_n": self.force_pp, "resonance_hz": self.resonance * HZ_PER_RAD_S,
-                "peak_compliance_m_per_n": self.peak,
+        return {"force_pp_n": self.force_pp, **self.band_peak.to_dict("compliance_m_per_n"),
                 "pad_amplitude_at_peak_m": self.pad_amplitude_at_peak,
                 "harmonics": self.harmonics, "points": int(self.omega.size),
                 "newton_iterations": self.newton_iterations, "wall_time_s": self.wall_time,
@@ -162,6 +165,8 @@ class NonlinearCompliance:
         The axis' name.
     notes : tuple of str
         Remarks for the reports (none from :func:`nonlinear_compliance` itself).
+    band : (float, float), optional
+        The band [rad/s] the curves were continued over.
     """
 
     speed: float
@@ -171,16 +176,28 @@ class NonlinearCompliance:
     settings: HarmonicSettings
     axis: str = ""
     notes: tuple = field(default=())
+    band: tuple | None = None
 
     def reference_peaks(self) -> dict:
-        """Return the peaks of the linear references.
+        """Return the largest values of the linear references (resonances or not).
 
         Returns
         -------
         dict
-            ``{name: (resonance [rad/s], peak [m/N])}``.
+            ``{name: (frequency [rad/s], largest compliance [m/N])}``; whether each is a
+            resonance, :meth:`reference_band_peaks` says.
         """
         return {k: curve_peak(w, c)[:2] for k, (w, c) in self.references.items()}
+
+    def reference_band_peaks(self) -> dict:
+        """Return the peaks of the linear references by the rule of :mod:`servotune.peaks`.
+
+        Returns
+        -------
+        dict
+            ``{name: BandPeak}``: a largest value at an edge of the band is no resonance.
+        """
+        return {k: band_peak(w, c, unit="m/N") for k, (w, c) in self.references.items()}
 
     def to_dict(self) -> dict:
         """Return the result as JSON-ready values (SI, Hz in ``_hz`` names).
@@ -189,20 +206,24 @@ class NonlinearCompliance:
         -------
         dict
             ``axis``, ``speed_m_per_s``, the settings (``harmonics``, ``aft_samples``,
-            ``tolerance``), ``curves`` (:meth:`ComplianceCurve.to_dict`), the peaks of
-            ``describing_function`` and ``linear_references``, and ``notes``.
+            ``tolerance``), ``band_hz``, ``curves`` (:meth:`ComplianceCurve.to_dict`), the
+            peaks of ``describing_function`` and ``linear_references`` (each with the keys of
+            :meth:`servotune.peaks.BandPeak.to_dict`: ``resonance_hz`` is None when the
+            largest value is at an edge of the band), and ``notes``.
         """
+        name = "compliance_m_per_n"
         return {
             "axis": self.axis, "speed_m_per_s": self.speed,
+            "band_hz": (None if self.band is None
+                        else [self.band[0] * HZ_PER_RAD_S, self.band[1] * HZ_PER_RAD_S]),
             "harmonics": self.settings.harmonics, "aft_samples": self.settings.samples,
             "tolerance": self.settings.tolerance,
             "curves": [c.to_dict() for c in self.curves],
             "describing_function": [
-                {"force_pp_n": c.force_pp, "resonance_hz": c.resonance * HZ_PER_RAD_S,
-                 "peak_compliance_m_per_n": c.peak} for c in self.describing],
+                {"force_pp_n": c.force_pp, **c.band_peak.to_dict(name)}
+                for c in self.describing],
             "linear_references": {
-                k: {"resonance_hz": w * HZ_PER_RAD_S, "peak_compliance_m_per_n": p}
-                for k, (w, p) in self.reference_peaks().items()},
+                k: p.to_dict(name) for k, p in self.reference_band_peaks().items()},
             "notes": list(self.notes)}
 
     def plot(self):
@@ -340,11 +361,10 @@ def require_stable_regime(setup, speed: float = 0.0) -> None:
     Raises
     ------
     servotune.plant.UnstableLoopError
-        (a ValueError) If the closed loop has a pole in the right half-plane; the message
-        names the unstable poles.
+        (a ValueError) If the closed loop has a pole in the right half-plane (a digital
+        drive: a growing multiplier of the sampled-data loop); the message names them.
     """
-    from ..frequency import require_stable
-    from ..plant import build_plant
+    from ..closed_loop import closed_loop
 
     p = setup.lugre
     if speed > 0.0:
@@ -353,7 +373,8 @@ def require_stable_regime(setup, speed: float = 0.0) -> None:
     else:
         contact = Contact.stiction(p.sigma0, p.sigma1, p.sigma2)
         what = "closed loop at rest (LuGre presliding contact)"
-    require_stable(build_plant(setup.structure, setup.drive, contact, setup.pads), what)
+    # a digital drive is checked as the sampled-data loop it is (the balance models it so)
+    closed_loop(setup.structure, setup.drive, contact, setup.pads).require_stable(what)
 
 
 @one_thread
@@ -374,7 +395,10 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     speed : float
         Feed speed [m/s] (0: at rest; the pads slide on average at this speed).
     band : (float, float)
-        Frequency band [rad/s], ``0 < start < end`` (default 10-100 Hz, the paper's sweep).
+        Frequency band [rad/s], ``0 < start < end`` (default 10-100 Hz, the paper's sweep;
+        :func:`servotune.analysis.default_band` gives an axis' band that holds its work-piece
+        modes). A curve whose largest value lies at the band's first or last frequency has no
+        resonance in it (:attr:`ComplianceCurve.band_peak`).
     settings : HarmonicSettings, optional
         Harmonics, AFT samples, tolerance (default 9 harmonics, 64 samples); the
         describing-function curves take H = 1 with the default samples for it (32).
@@ -452,4 +476,5 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
             refs[name] = (omega, np.abs(axis_compliance(setup.structure, omega, setup.drive,
                                                         contact, setup.pads)[0]))
     return NonlinearCompliance(speed=speed, curves=tuple(curves), describing=tuple(df),
-                               references=refs, settings=settings, axis=setup.name)
+                               references=refs, settings=settings, axis=setup.name,
+                               band=(float(band[0]), float(band[1])))
