@@ -753,6 +753,7 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
         except (OSError, ValueError) as exc:
             raise _err(file, "[friction] measurements.stribeck", str(exc),
                        "give a CSV of sliding friction over both velocity signs") from None
+    _check_bristles(getattr(law, "lugre_parameters", None), file, name)
     viscous = table.get("viscous") if not isinstance(table.get("viscous"), dict) else None
     try:
         return GuideWayFriction(tuple(pads), viscous=_number(
@@ -760,6 +761,28 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
             high=1e10, unit="N s/m"), law=law)
     except ValueError as exc:
         raise _err(file, "[friction]", str(exc), "fix the values") from None
+
+
+#: Largest plausible bristle time constant sigma1 / sigma0 [s]: identified guide ways and
+#: contacts give 1e-4 to 1e-2 s (Canudas de Wit et al. 1995: 3.2 ms; Bianchi et al. 2014:
+#: 2.7 ms); a hundred times the upper end is a unit or exponent slip, not a contact.
+BRISTLE_TIME_MAX = 1.0
+
+
+def _check_bristles(params, file, name) -> None:
+    """Refuse LuGre bristles whose damping time constant sigma1 / sigma0 no contact has."""
+    if params is None or not params.sigma0 > 0:
+        return
+    tau = params.sigma1 / params.sigma0
+    if tau > BRISTLE_TIME_MAX:
+        raise _err(file, f"[friction.{name}] sigma1",
+                   f"sigma1 / sigma0 = {params.sigma1:.3g} N s/m / {params.sigma0:.3g} N/m = "
+                   f"{tau:.3g} s: a bristle damping time constant above "
+                   f"{BRISTLE_TIME_MAX:g} s is physically implausible (identified guide "
+                   "ways give 1e-4 to 1e-2 s: Canudas de Wit et al. 1995, Bianchi et al. 2014 "
+                   "2.7 ms)",
+                   "check the unit (N s/m) and the exponent of sigma1, e.g. sigma1 = "
+                   f"{2.7e-3 * params.sigma0:.2g} for 2.7 ms")
 
 
 _MOTOR_KEYS = ("torque_constant", "back_emf_constant", "resistance", "inductance")

@@ -192,19 +192,31 @@ def main(argv: list[str] | None = None) -> int:
         return _interrupted(label, args, None)
     except (CliError, ValueError, RuntimeError, LookupError) as exc:
         print(f"{label}: error: {_text(exc)}", file=sys.stderr)
-        return 1
+        return _json_error(args, label, "input", _text(exc))
     except OSError as exc:
         if isinstance(exc, BrokenPipeError):  # output piped into e.g. head: stop quietly
             sys.stderr.close()
             return 0
         print(f"{label}: error: {_os_message(exc)}", file=sys.stderr)
-        return 1
+        return _json_error(args, label, "file", _os_message(exc))
     except Exception as exc:
         if os.environ.get("SERVOTUNE_TRACEBACK"):
             raise
-        print(f"{label}: internal error ({type(exc).__name__}: {exc}); please report it with "
-              "the command line (SERVOTUNE_TRACEBACK=1 shows the traceback)", file=sys.stderr)
-        return 1
+        text = (f"internal error ({type(exc).__name__}: {exc}); please report it with the "
+                "command line (SERVOTUNE_TRACEBACK=1 shows the traceback)")
+        print(f"{label}: {text}", file=sys.stderr)
+        return _json_error(args, label, "internal", text)
+
+
+def _json_error(args, label: str, kind: str, text: str) -> int:
+    """Under ``--json``, print the error as the command's one JSON object too (``status``
+    "error", ``error_kind`` input/file/internal, ``error``, ``exit_status``); return 1."""
+    if getattr(args, "json", False):
+        import json
+
+        print(json.dumps({"command": label, "status": "error", "error_kind": kind,
+                          "error": text, "exit_status": 1}))
+    return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1106,7 +1106,7 @@ class _NoOptimum:
     """Why no start reached a usable optimum: ``kind`` "unstable" (the optima that meet the
     frequency constraints all have an unstable loop), "objective" (the constraints were met,
     only the objective's bound did not settle) or "constraint" (``constraint`` was violated
-    by ``violation`` in scaled units at the best start)."""
+    by ``violation``, relative to its limit, at the best start)."""
 
     kind: str
     n_starts: int
@@ -1121,8 +1121,34 @@ class _NoOptimum:
         if self.kind == "objective":
             return (f"IPOPT did not converge from any of {self.n_starts} starts ({self.status}); "
                     "the frequency constraints were met, only the objective did not settle")
-        return (f"'{self.constraint}' violated by {self.violation:.3g} in scaled units at the "
-                f"best of {self.n_starts} starts; IPOPT: {self.status}")
+        return (f"'{self.constraint}' still violated at the best of {self.n_starts} starts "
+                f"(IPOPT: {self.status})")
+
+
+#: What an axis file changes to relax each kind of constraint (by the start of its name).
+FIXES = (
+    ("thrust", "a stronger motor ([drive.motor] torque_continuous, torque_peak, torque_speed), "
+               "a lower rapid speed or acceleration ([operation] rapid_speed, acceleration), "
+               "a smaller reserve ([requirements] thrust_margin) or less guide-way friction "
+               "([friction]; the floor of C is the guide ways' own sigma2, [tuning] c)"),
+    ("Ms", "the margins ([requirements] ms_velocity_max, ms_position_max, "
+           "phase_margin_min_deg, gain_margin_min_db), or a faster drive ([drive.sampling] "
+           "periods and computation_delay) and fewer set-point filters ([drive.filters])"),
+    ("loop hierarchy", "[requirements] bandwidth_ratio_min, or the bounds of Kv ([tuning] kv)"),
+    ("current loop", "[requirements] current_bandwidth_ratio_min, or a faster current loop "
+                     "([drive.current_loop] kp, ti; [drive.sampling] current_period)"),
+    ("Ti", "[requirements] ti_bandwidth_min, ti_bandwidth_max, or the bounds of Ti ([tuning] "
+           "ti)"),
+    ("kv_min", "the least Kv ([requirements] kv_min) or the bounds of Kv ([tuning] kv)"),
+)
+
+
+def _fixes(constraint: str) -> str:
+    """The axis fields that relax a constraint, or the generic advice."""
+    for prefix, text in FIXES:
+        if constraint.startswith(prefix):
+            return text
+    return "relax it or widen the bounds of the free variables"
 
 
 def _no_optimum(solver: Solver, runs, n_starts) -> _NoOptimum:
@@ -1157,8 +1183,7 @@ def _raise_infeasible(why: _NoOptimum, initial_checks):
             "the initial design or add starts")
     raise RequirementsNotMetError(
         f"requirements infeasible within the bounds: the binding constraint is "
-        f"'{why.constraint}' ({why}), and {initial}; relax it or widen the bounds of the "
-        "free variables")
+        f"'{why.constraint}' ({why}), and {initial}; to fix: {_fixes(why.constraint)}")
 
 
 def _active(problem: TuningProblem, design: Design, solver: Solver, best: Solution) -> list:

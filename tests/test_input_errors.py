@@ -1,0 +1,74 @@
+"""Errors in physical terms: implausible friction named as such, an infeasible thrust in kN
+with the fields that fix it, and the error as one JSON object under ``--json``.
+
+References: hand calculations from the axis file's own values (the LuGre bristle time
+constant sigma1/sigma0 of Bianchi et al. 2014; the usable continuous thrust torque / ratio x
+(1 - reserve); the friction at rapid speed Fc + sigma2 v).
+"""
+
+import json
+
+import pytest
+
+from servotune.axis import AxisFormatError, load_axis
+from servotune.cli import main
+from servotune.template import write_template
+
+
+def _starter(tmp_path, *replacements):
+    write_template(tmp_path / "ax")
+    toml = tmp_path / "ax" / "axis.toml"
+    text = toml.read_text()
+    for old, new in replacements:
+        assert old in text
+        text = text.replace(old, new, 1)
+    toml.write_text(text)
+    return tmp_path / "ax"
+
+
+def test_a_bristle_damping_no_contact_has_is_refused(tmp_path):
+    """sigma1 = 1e12 N s/m over sigma0 = 5.9e9 N/m is a 169 s bristle time constant (a unit or
+    exponent slip: identified contacts give milliseconds, Bianchi 2014: 1.6e7 / 5.9e9 = 2.7
+    ms, which loads)."""
+    folder = _starter(tmp_path, ("sigma1 = 1.6e7 ", "sigma1 = 1.0e12 "))
+    with pytest.raises(AxisFormatError) as err:
+        load_axis(folder)
+    text = str(err.value)
+    assert "[friction.lugre] sigma1" in text and "implausible" in text
+    assert f"{1.0e12 / 5.9e9:.3g} s" in text
+    axis = load_axis(_starter(tmp_path / "ok"))
+    p = axis.friction.lugre
+    assert p.sigma1 / p.sigma0 == pytest.approx(1.6e7 / 5.9e9)
+
+
+def test_an_infeasible_thrust_is_said_in_kn_with_the_fields_that_fix_it(tmp_path, capsys):
+    """A motor of 2 N m continuous cannot carry the guide ways' own friction at rapid speed:
+    the error gives the thrust needed and usable in kN (hand calculation below), names the
+    fields that fix it, speaks of no scaled units, exits 1 and prints one JSON object."""
+    folder = _starter(tmp_path, ("torque_continuous = 12.0", "torque_continuous = 2.0"))
+    axis = load_axis(folder)
+    usable = 2.0 / axis.drive.ratio * (1.0 - axis.requirements.thrust_margin)
+    lugre = axis.friction.lugre
+    needed = lugre.fc + lugre.sigma2 * axis.operation.rapid_speed
+    code = main(["tune", str(folder), "--no-simulation", "--json", "--out",
+                 str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert code == 1
+    out = json.loads(captured.out)
+    assert out["status"] == "error" and out["exit_status"] == 1
+    text = out["error"]
+    assert text in captured.err
+    assert f"needs {needed / 1e3:.3g} kN of {usable / 1e3:.3g} kN usable" in text
+    assert "[drive.motor] torque_continuous" in text and "[operation] rapid_speed" in text
+    assert "scaled units" not in text
+
+
+def test_an_input_error_is_one_json_object_under_json(tmp_path, capsys):
+    """A missing axis folder: exit 1, the message on standard error and, with --json, the same
+    message as the one JSON object on standard output."""
+    code = main(["tune", str(tmp_path / "nowhere"), "--json"])
+    captured = capsys.readouterr()
+    assert code == 1
+    out = json.loads(captured.out)
+    assert out["status"] == "error" and out["error_kind"] in ("input", "file")
+    assert out["error"] in captured.err and "nowhere" in out["error"]
