@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import analysis, twomass
+from . import progress as _progress
 from .axis import Axis
 from .blas import one_thread
 from .closed_loop import axis_compliance
@@ -1065,7 +1066,8 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         from .baseline import commissioning_design
 
         try:
-            commissioned = commissioning_design(axis)
+            with _progress.task("commissioning the axis (technical and symmetric optimum)"):
+                commissioned = commissioning_design(axis)
         except ValueError as exc:
             commission_notes = (f"no commissioning start ({str(exc).splitlines()[0][:200]}): "
                                 "the tuning starts from the axis' own drive",)
@@ -1150,8 +1152,10 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
             # needs fewer starts
             first = () if last is None else (dataclasses.replace(
                 last.design, c=max(last.design.c, c_floor or 0.0)),)
-            result = tune(problem, starts=starts if last is None else min(starts, 2),
-                          seed=seed, tolerance=tolerance, callback=callback, first=first)
+            n_starts = starts if last is None else min(starts, 2)
+            with _progress.task(f"tuning, round {number} ({n_starts} starts)"):
+                result = tune(problem, starts=n_starts, seed=seed, tolerance=tolerance,
+                              callback=callback, first=first)
         except (RequirementsNotMetError, NoStableStartError, TuningDidNotConvergeError) as exc:
             if number == 1:
                 raise
@@ -1165,7 +1169,8 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
         # the design is refuted before anything is simulated; one whose instability no gain
         # reaches (a pad mode the friction's falling slope destabilises) needs damping: the
         # least C that holds it becomes the lower bound of C in the next round
-        new = spread_screen(axis, result.problem, result.design)
+        with _progress.task("screening the friction spread (linear)"):
+            new = spread_screen(axis, result.problem, result.design)
         new = tuple(m for m in new if m.name not in {a.name for a in added})
         if new and number < MAX_ROUNDS:
             needs = []
@@ -1566,52 +1571,62 @@ def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress
                              problem.pads).largest_stable_kp(rtol=1e-3)
         out["kp_limit"] = {"kp_max": kp_max, "ti": initial.velocity_loop.ti,
                            "model": model.name, "kp_initial": initial.velocity_loop.kp}
+    with _progress.task("the analyses: loops, compliance curves, lobes, modes against C"):
+        if axis.drive is not None and result.after is not None:
+            before_drive = problem.drive_for(result.initial)
+            after_drive = problem.drive_for(result.design)
+            c_before = _reference_contact(problem, result.initial)
+            c_after = _reference_contact(problem, result.design)
+            if result.before.stable:
+                out["loops_before"] = analysis.loop_report(axis, c_before, before_drive)
+            if result.after.stable:
+                out["loops_after"] = analysis.loop_report(axis, c_after, after_drive)
+            omega = analysis.default_omega(1.0, 1000.0, 3000)
+            curves_before, curves_after = [], []
+            for mp0, mp1 in zip(result.before.models, result.after.models, strict=True):
+                if not mp1.model.cutting or mp1.model.sample != "nominal":
+                    continue
+                if mp0.stable:
+                    curves_before.append(analysis.compliance_curve(
+                        axis, mp0.model.contact(result.initial.c), before_drive, omega,
+                        f"before, {mp0.model.name}"))
+                if mp1.stable:
+                    curves_after.append(analysis.compliance_curve(
+                        axis, mp1.model.contact(result.design.c), after_drive, omega,
+                        f"after, {mp1.model.name}"))
+            out["compliance_before"] = tuple(curves_before)
+            out["compliance_after"] = tuple(curves_after)
+            if axis.cutting is not None:
+                worst0, worst1 = result.before.worst_model, result.after.worst_model
+                if worst0 is not None:
+                    out["lobes_before"] = analysis.axis_lobes(
+                        axis, worst0.model.contact(result.initial.c), before_drive)
+                if worst1 is not None:
+                    out["lobes_after"] = analysis.axis_lobes(
+                        axis, worst1.model.contact(result.design.c), after_drive)
+            if "c" in problem.free and result.after.stable:
+                lo, hi = problem.bounds["c"]
+                try:
+                    # a sampled-data loop's peaks are found on its compliance: a coarser C grid
+                    n_c = 61 if after_drive.digital.is_continuous else 13
+                    out["mode_peaks"] = mode_peaks_vs_damping(
+                        axis, np.geomspace(lo, hi, n_c), after_drive, result.design.c)
+                except (ValueError, np.linalg.LinAlgError):
+                    out["mode_peaks"] = None
     if axis.drive is not None and result.after is not None:
-        before_drive = problem.drive_for(result.initial)
-        after_drive = problem.drive_for(result.design)
-        c_before = _reference_contact(problem, result.initial)
-        c_after = _reference_contact(problem, result.design)
-        if result.before.stable:
-            out["loops_before"] = analysis.loop_report(axis, c_before, before_drive)
-        if result.after.stable:
-            out["loops_after"] = analysis.loop_report(axis, c_after, after_drive)
-        omega = analysis.default_omega(1.0, 1000.0, 3000)
-        curves_before, curves_after = [], []
-        for mp0, mp1 in zip(result.before.models, result.after.models, strict=True):
-            if not mp1.model.cutting or mp1.model.sample != "nominal":
-                continue
-            if mp0.stable:
-                curves_before.append(analysis.compliance_curve(
-                    axis, mp0.model.contact(result.initial.c), before_drive, omega,
-                    f"before, {mp0.model.name}"))
-            if mp1.stable:
-                curves_after.append(analysis.compliance_curve(
-                    axis, mp1.model.contact(result.design.c), after_drive, omega,
-                    f"after, {mp1.model.name}"))
-        out["compliance_before"] = tuple(curves_before)
-        out["compliance_after"] = tuple(curves_after)
-        if axis.cutting is not None:
-            worst0, worst1 = result.before.worst_model, result.after.worst_model
-            if worst0 is not None:
-                out["lobes_before"] = analysis.axis_lobes(
-                    axis, worst0.model.contact(result.initial.c), before_drive)
-            if worst1 is not None:
-                out["lobes_after"] = analysis.axis_lobes(
-                    axis, worst1.model.contact(result.design.c), after_drive)
-        if "c" in problem.free and result.after.stable:
-            lo, hi = problem.bounds["c"]
-            try:
-                # a sampled-data loop's peaks are found on its compliance: a coarser C grid
-                n_c = 61 if after_drive.digital.is_continuous else 13
-                out["mode_peaks"] = mode_peaks_vs_damping(
-                    axis, np.geomspace(lo, hi, n_c), after_drive, result.design.c)
-            except (ValueError, np.linalg.LinAlgError):
-                out["mode_peaks"] = None
         if simulate and axis.friction is not None:
             from .verdict import nonlinear_verdict
 
-            out["verdict"] = nonlinear_verdict(axis, result, executor=executor,
-                                               progress=progress)
+            # one named stage with its count (and so an ETA): simulations and harmonic balance
+            with _progress.task("the verdict: simulations and harmonic balance",
+                                unit="run") as stage:
+                def report(done, total):
+                    stage.report(done, total)
+                    if progress is not None:
+                        progress(done, total)
+
+                out["verdict"] = nonlinear_verdict(axis, result, executor=executor,
+                                                   progress=report)
     if axis.drive is None and result.after is not None:
         omega = analysis.default_omega(1.0, 1000.0, 3000)
         out["compliance_before"] = (analysis.compliance_curve(

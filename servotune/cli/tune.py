@@ -172,16 +172,15 @@ def run(args) -> int:
     simulate = (not args.no_simulation and axis.drive is not None
                 and axis.friction is not None)
     workers = args.workers or default_workers()
-    with progress.task(f"{axis.name}: tuning", unit="solve") as tuning:
+    # the stages (commissioning, tuning rounds, the spread's screen, the analyses, the
+    # verdict's simulations with their count) name themselves inside this task
+    with progress.task(f"{axis.name}: the design job"):
         pool_cm = (interrupt.process_pool(workers) if simulate and workers > 1
                    else _no_pool())
         with pool_cm as pool:
-            def report_sims(done, total):
-                tuning.report(done, total)
-
             job = tune_axis(axis, free=args.free, chatter_weight=args.chatter_weight,
                             starts=args.starts, simulate=simulate, executor=pool,
-                            progress=report_sims, commission=not args.no_commission)
+                            commission=not args.no_commission)
     interrupt.check("the tuning")
     results = job.to_dict()
     notes += list(job.result.notes)
@@ -208,7 +207,15 @@ def run(args) -> int:
         print_json(results)
         return status
     r = job.result
-    print(f"{axis.name}: tuned {', '.join(r.problem.free)} over {r.stats.models} regime "
+    # the verdict first, then what it rests on
+    head, lines = summary.verdict_lines(job)
+    print(f"{axis.name}: {head}")
+    for line in lines:
+        print("    " + line)
+    print(f"  design: {_design_line(r.design)}")
+    print(f"  report: {out.file('report.html')}")
+    print("Details")
+    print(f"  tuned {', '.join(r.problem.free)} over {r.stats.models} regime "
           f"models ({r.stats.starts} starts, {r.stats.iterations} IPOPT iterations, "
           f"{r.stats.time_s:.1f} s)")
     for line in notes:
@@ -227,13 +234,26 @@ def run(args) -> int:
               f"tuned {t.c_opt_tuned:.6e} N s/m (relative difference "
               f"{t.c_relative_difference:+.1e}); peak g(alpha)/K {t.peak_analytic:.6e} m/N, "
               f"tuned {t.peak_tuned:.6e} m/N ({t.peak_relative_difference:+.1e})")
-    head, lines = summary.verdict_lines(job)
-    print("  " + head)
-    for line in lines:
-        print("    " + line)
+    print(f"{axis.name}: {head.split(':')[0]} (the verdict above)")
     print(f"  wrote {out.path} (results.json, {len(results['files'])} figures, report.html)")
     print(f"  report: {out.file('report.html')}")
     return status
+
+
+def _design_line(d) -> str:
+    """The design in one line (SI, Kv also in (m/min)/mm)."""
+    from ..units import HZ_PER_RAD_S, kv_to_m_per_min_per_mm
+
+    if d.kv is None:
+        return f"C {d.c:.4g} N s/m"
+    text = (f"C {d.c:.4g} N s/m, Kv {d.kv:.4g} 1/s ({kv_to_m_per_min_per_mm(d.kv):.3g} "
+            f"(m/min)/mm), Kp {d.kp:.4g} N m s/rad, Ti {d.ti * 1e3:.4g} ms")
+    n = d.notch
+    if n is not None and n.depth < 1.0 - 1e-9:
+        text += f", notch {n.f_hz:.1f} Hz (width {n.width:.2g}, depth {n.depth:.2g})"
+    if d.lowpass_frequency is not None:
+        text += f", low-pass {d.lowpass_frequency * HZ_PER_RAD_S:.4g} Hz"
+    return text
 
 
 class _no_pool:
