@@ -11,6 +11,15 @@ import pytest
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
+@pytest.fixture(autouse=True)
+def _results_in_a_temporary_folder(tmp_path, monkeypatch):
+    """A command run without --out writes into the test's temporary folder, never into the
+    working copy's ./out."""
+    from servotune.cli import _common
+
+    monkeypatch.setattr(_common, "DEFAULT_OUT", str(tmp_path / "out"))
+
+
 @pytest.fixture(scope="session")
 def bundled_job():
     """The bundled axis tuned once for the whole session, with the nonlinear verdict (the

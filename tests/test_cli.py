@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import two_mass_reference as ref
 
-from servotune.cli import COMMANDS, SUMMARIES, build_parser, main
+from servotune.cli import COMMANDS, SUMMARIES, _common, build_parser, main
 from servotune.cli._common import RunOutput, print_json, to_jsonable
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
@@ -390,7 +390,7 @@ def test_the_readme_flag_table_matches_the_commands():
 @pytest.mark.parametrize("command", COMMANDS)
 def test_one_default_per_notion(command):
     parser = _subparser(command)
-    defaults = {"--out": Path("out"), "--workers": None, "--duration": 20.0,
+    defaults = {"--out": Path(_common.DEFAULT_OUT), "--workers": None, "--duration": 20.0,
                 "--json": False, "--quiet": False, "--no-plots": False}
     for flag in ("--json", "--quiet"):
         assert _option(parser, flag).default is False, flag
@@ -423,7 +423,7 @@ def test_helpers_for_the_tune_and_verify_rework():
     add_common_options(parser, plots=True)
     args = parser.parse_args(["--sweep-duration", "4", "--starts", "2"])
     assert args.duration == 4.0 and args.starts == 2 and args.workers is None
-    assert args.out == Path("out") and not args.no_plots
+    assert args.out == Path(_common.DEFAULT_OUT) and not args.no_plots
     assert "--sweep-duration" not in parser.format_help()
     for bad in (["--starts", "0"], ["--starts", "-5"], ["--starts", "1000000"],
                 ["--sweep-duration", "0"], ["--workers", "0"]):
