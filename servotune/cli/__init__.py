@@ -167,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     _one_blas_thread()
     from .. import interrupt, progress
-    from ._common import CliError, show_progress
+    from ._common import CliError, UsageError, show_progress
 
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(_chosen(argv))
@@ -190,6 +190,11 @@ def main(argv: list[str] | None = None) -> int:
                 return _interrupted(label, args, progress.current())
     except KeyboardInterrupt:  # pressed while the handling was being set up or taken down
         return _interrupted(label, args, None)
+    except UsageError as exc:
+        print(f"{label}: error: {_text(exc)} ('{label} --help' lists the arguments)",
+              file=sys.stderr)
+        _json_error(args, label, "usage", _text(exc), status=2)
+        return 2
     except (CliError, ValueError, RuntimeError, LookupError) as exc:
         print(f"{label}: error: {_text(exc)}", file=sys.stderr)
         return _json_error(args, label, "input", _text(exc))
@@ -208,15 +213,16 @@ def main(argv: list[str] | None = None) -> int:
         return _json_error(args, label, "internal", text)
 
 
-def _json_error(args, label: str, kind: str, text: str) -> int:
+def _json_error(args, label: str, kind: str, text: str, status: int = 1) -> int:
     """Under ``--json``, print the error as the command's one JSON object too (``status``
-    "error", ``error_kind`` input/file/internal, ``error``, ``exit_status``); return 1."""
+    "error", ``error_kind`` usage/input/file/internal, ``error``, ``exit_status``); return
+    ``status``."""
     if getattr(args, "json", False):
         import json
 
         print(json.dumps({"command": label, "status": "error", "error_kind": kind,
-                          "error": text, "exit_status": 1}))
-    return 1
+                          "error": text, "exit_status": status}))
+    return status
 
 
 if __name__ == "__main__":  # pragma: no cover

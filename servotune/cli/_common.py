@@ -60,6 +60,7 @@ from pathlib import Path
 __all__ = [
     # errors
     "CliError",
+    "UsageError",
     "OutputError",
     # numeric flag types
     "number",
@@ -105,6 +106,11 @@ class CliError(Exception):
 
 class OutputError(CliError):
     """The output folder cannot take the results (a file in the way, no permission, ...)."""
+
+
+class UsageError(CliError):
+    """A missing or conflicting argument the parser cannot see (e.g. one of several that are
+    each optional): exit status 2, as argparse's own usage errors."""
 
 
 # --- numeric flags -----------------------------------------------------------------------------

@@ -12,7 +12,14 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._common import RunOutput, add_common_options, number, print_json, write_results
+from ._common import (
+    RunOutput,
+    UsageError,
+    add_common_options,
+    number,
+    print_json,
+    write_results,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -132,9 +139,9 @@ def run(args) -> int:
         from ..structure.reduction_check import reduction_check
 
     if len(args.matrices) > 2:
-        raise ValueError("give MASS [STIFFNESS]: at most two matrix files")
+        raise UsageError("give MASS [STIFFNESS]: at most two matrix files")
     if args.n_modes is not None and args.f_max_hz is not None:
-        raise ValueError("give --n-modes or --f-max-hz, not both")
+        raise UsageError("give --n-modes or --f-max-hz, not both")
     coords = io.read_coordinates(args.coordinates) if args.coordinates else None
     if len(args.matrices) == 1 and args.matrices[0].is_dir():
         source, subject, out = _check_axis(args, coords, progress)

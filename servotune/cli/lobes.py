@@ -11,6 +11,7 @@ from ._common import (
     COUNT,
     CliError,
     RunOutput,
+    UsageError,
     add_common_options,
     add_contact_options,
     axis_from_args,
@@ -133,7 +134,7 @@ def _compliance(args):
     given = [name for name, ok in (("AXIS", args.axis is not None), ("--mode", bool(modes)),
                                    ("--frf", bool(args.frf))) if ok]
     if len(given) > 1:
-        raise ValueError(f"give one source of the compliance, not {' and '.join(given)}")
+        raise UsageError(f"give one source of the compliance, not {' and '.join(given)}")
     if args.axis is not None:
         from ..analysis import feed_compliance
         from ..axis import load_axis
@@ -148,7 +149,7 @@ def _compliance(args):
     if args.frf:
         return chatter.read_frf_csv(args.frf), f"measured FRF {args.frf}", None
     if not modes:
-        raise ValueError("give the compliance: AXIS, --mode FN_HZ ZETA K_N_PER_M (repeatable) "
+        raise UsageError("give the compliance: AXIS, --mode FN_HZ ZETA K_N_PER_M (repeatable) "
                          "or --frf FILE.csv")
     return chatter.modal_compliance(modes), f"{len(modes)} mode(s)", None
 

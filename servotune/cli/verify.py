@@ -21,6 +21,7 @@ from pathlib import Path
 from ._common import (
     CliError,
     RunOutput,
+    UsageError,
     add_common_options,
     add_workers_option,
     default_workers,
@@ -215,7 +216,7 @@ def add_parser(subparsers) -> None:
 def _band(args):
     """The sweep band of the flags (None: the axis'), checked before any work."""
     if (args.f_start_hz is None) != (args.f_end_hz is None):
-        raise CliError("give both --f-start-hz and --f-end-hz, or neither (then the band "
+        raise UsageError("give both --f-start-hz and --f-end-hz, or neither (then the band "
                        "comes from the axis)")
     if args.f_start_hz is None:
         return None
