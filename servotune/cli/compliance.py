@@ -142,8 +142,12 @@ def run(args) -> int:
         print_json(out)
         return 0
     print(f"{axis.name}: work-piece X compliance" + (" (closed loop)" if controlled else ""))
+    # one vocabulary: what the command assumed is a default taken, anything else a note
+    taken = set(default_notes(axis))
+    if args.f_start_hz is None and args.f_end_hz is None:
+        taken.add(band_note)
     for note in notes:
-        print(f"  note: {note}")
+        print(f"  {'default taken' if note in taken else 'note'}: {note}")
     widen = {"widen_low": "widen the band (--f-start-hz)",
              "widen_high": "widen the band (--f-end-hz)"}
     for c in curves:

@@ -157,7 +157,7 @@ def run(args) -> int:
               "towards 0 Hz and no band can hold it")
     for note in default_notes(axis):
         print(f"  default taken: {note}")
-    print(f"  note: {default.note()}")
+    print(f"  default taken: {default.note()}")
     if coverage.reduced:
         print(f"  {'WARNING: ' if not coverage.covered else ''}{coverage.message}")
     print(f"  wrote {out.path}")

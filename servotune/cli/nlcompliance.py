@@ -158,7 +158,8 @@ def run(args) -> int:
     where = "at rest" if not args.speed else f"feeding at {args.speed * 1e3:g} mm/s"
     print(f"{axis.name}: work-piece X compliance with LuGre pads {where}, harmonic balance with "
           f"{result.settings.harmonics} harmonics ({result.settings.samples} AFT samples)")
-    print(f"note: {band_note}")
+    given = args.f_start_hz is not None or args.f_end_hz is not None
+    print(f"  {'note' if given else 'default taken'}: {band_note}")
     widen = {"widen_low": "widen the band (--f-start-hz)",
              "widen_high": "widen the band (--f-end-hz)"}
     print(f"{'F pp [N]':>9} | {'resonance [Hz]':>14} | {'peak [m/N]':>10} | "
