@@ -44,9 +44,11 @@ def add_parser(subparsers) -> None:
                     "Every finished sample is written at once to OUT/study_<name>/rows/ "
                     "(Parquet); a re-run skips what is done; results.parquet and summary.html "
                     "hold the whole study. Without --scheduler the samples run on a local "
-                    "cluster of --workers processes. Exit status 0 when every sample ran "
-                    "(failed samples are rows with their reason), 1 for a bad study file, "
-                    "130 interrupted (the rows written stay).")
+                    "cluster of --workers processes. The study is checked against its axes "
+                    "before any sample runs (every varied path, each value's type, the values "
+                    "the axis loader refuses). Exit status 0 when every sample ran (failed "
+                    "samples are rows with their reason), 1 for a bad study file, 130 "
+                    "interrupted (the rows written stay, and the line says where).")
     p.add_argument("study", help="study file (TOML)")
     p.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
                    help="address of a running dask scheduler (tcp://host:8786); default a "
@@ -58,12 +60,40 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-class _Written:
-    """What the interruption message reads: the study folder, and whether rows are in it."""
+def _state(folder, keys) -> tuple[bool, int]:
+    """Whether the folder has its study.json, and how many of the study's rows it holds."""
+    rows = {p.stem for p in (folder / "rows").glob("*.parquet")} if (folder / "rows").is_dir() \
+        else set()
+    return (folder / "study.json").is_file(), len(rows & keys)
 
-    def __init__(self, path):
-        self.path = path
-        self.committed = False
+
+def _interrupted(what: str | None, folder, keys, before: tuple[bool, int]) -> int:
+    """Print the one line of an interrupted study: what is in its folder now, truthfully."""
+    import sys
+
+    from .. import interrupt
+    from . import EXIT_INTERRUPTED
+
+    interrupt.restore_stderr()
+    try:  # a progress bar's line may still stand (its clearing went to the silenced stderr)
+        if sys.stderr.isatty():
+            sys.stderr.write("\r\x1b[K")
+    except (AttributeError, ValueError, OSError):
+        pass
+    marker, rows = _state(folder, keys)
+    new = rows - before[1]
+    if not marker:
+        kept = "nothing was written"
+    elif not rows:
+        kept = (f"{folder} holds study.json and an empty rows/ (no sample had finished); the "
+                "same command starts the study again")
+    else:
+        kept = (f"{folder} keeps study.json and the rows of {rows} of {len(keys)} samples "
+                f"in rows/ ({new} finished in this run); the same command goes on from them, "
+                "'servotune tune --spread-from' reads them")
+    print("servotune study: interrupted" + (f" during {what}" if what else "") + f"; {kept}",
+          file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def run(args) -> int:
@@ -77,8 +107,9 @@ def run(args) -> int:
     Returns
     -------
     int
-        The exit status: 0. Errors are raised, and reported by
-        :func:`servotune.cli.main` with status 1.
+        The exit status: 0 the study ran (failed samples are rows with their reason), 130
+        interrupted (with one line saying what the folder keeps). Errors are raised, and
+        reported by :func:`servotune.cli.main` with status 1.
     """
     from .. import progress
     from ..study import (
@@ -91,7 +122,8 @@ def run(args) -> int:
     )
 
     try:
-        study = load_study(args.study)
+        with progress.task(f"checking {args.study}"):
+            study = load_study(args.study)
     except StudyFormatError as exc:
         raise CliError(str(exc)) from None
     if args.scheduler and args.workers:
@@ -99,20 +131,24 @@ def run(args) -> int:
                        "workers: give one of them")
     workers = args.workers or default_workers()
     folder = study_folder(study, args.out)
-    written = _Written(folder)
-    args.run_output = written
-    n = len(study.sample_list())
-
-    def row_written(_row):
-        written.committed = True
-
-    with progress.task(f"study {study.name}: {n} samples", total=n, unit="sample") as task:
-        try:
-            result = run_study(study, args.out, scheduler=args.scheduler, workers=workers,
-                               progress=task.report, on_row=row_written)
-        except StudyFolderError as exc:
-            raise CliError(str(exc)) from None
-    summary, files = write_summary(study, result, plots=not args.no_plots)
+    samples = study.sample_list()
+    n = len(samples)
+    keys = {s.key for s in samples}
+    before = _state(folder, keys)
+    what = None
+    try:
+        with progress.task(f"study {study.name}: {n} samples", total=n, unit="sample") as task:
+            try:
+                result = run_study(study, args.out, scheduler=args.scheduler, workers=workers,
+                                   progress=task.report)
+            except StudyFolderError as exc:
+                raise CliError(str(exc)) from None
+            except KeyboardInterrupt:
+                what = progress.current()
+                raise
+        summary, files = write_summary(study, result, plots=not args.no_plots)
+    except KeyboardInterrupt:
+        return _interrupted(what, folder, keys, before)
     out = {"study": study.name, "folder": str(result.folder), "run": result.to_dict(),
            "summary": summary.to_dict(),
            "files": [str(p.relative_to(result.folder)) for p in files]
@@ -120,10 +156,7 @@ def run(args) -> int:
     if args.json:
         print_json(out)
         return 0
-    share = summary.verified_share
-    print(f"study {study.name}: {summary.done} of {summary.samples} samples done, "
-          f"{summary.failed} failed" + ("" if share is None else
-                                        f", {summary.verified} verified ({share:.0%})"))
+    print(f"study {study.name}: {summary.counts()}")
     print(f"  this run: {result.computed} computed, {result.skipped} already done, "
           f"{result.wall_time:.1f} s on {result.scheduler} "
           f"({result.throughput:.3g} samples/s)")

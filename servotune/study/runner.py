@@ -21,11 +21,15 @@ the same paths.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
+import signal
 import tempfile
+import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -163,6 +167,33 @@ def _settings(study: Study) -> dict:
             "relative": sorted({v.path for v in study.variations if v.relative})}
 
 
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT held back from this thread, and from the threads and processes it starts.
+
+    The worker processes of a LocalCluster are started by threads the cluster starts; started
+    inside this block they inherit the blocked signal (through ``exec`` too), so Ctrl-C at the
+    terminal, which goes to every process of its group, reaches only this process: the
+    workers print no tracebacks and are closed by it. A Ctrl-C pressed inside the block is
+    delivered at its end. Outside the main thread, or without ``pthread_sigmask``, nothing
+    changes.
+    """
+    block = (hasattr(signal, "pthread_sigmask")
+             and threading.current_thread() is threading.main_thread())
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if block else None
+    try:
+        yield
+    finally:
+        if block:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+#: run first in every local worker (restarted ones too): Ctrl-C is this process' to handle;
+#: the blocked signal alone does not last, as multiprocessing's resource tracker unblocks it
+#: in the thread that starts it
+_IGNORE_CTRL_C = "from servotune.interrupt import ignore_in_worker; ignore_in_worker()"
+
+
 def _client(scheduler: str | None, workers: int):
     from distributed import Client, LocalCluster
 
@@ -170,11 +201,28 @@ def _client(scheduler: str | None, workers: int):
         return Client(scheduler, timeout="20s"), None
     env = {name: "1" for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
                                   "MKL_NUM_THREADS")}
-    # on this machine only (loopback); the scheduler's HTTP server on a free port, so that
-    # two studies at once do not compete for dask's default 8787
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address="127.0.0.1:0", env=env, silence_logs=40)
-    return Client(cluster), cluster
+    cluster = client = None
+    try:
+        with _sigint_blocked():
+            # on this machine only (loopback); the scheduler's HTTP server on a free port, so
+            # that two studies at once do not compete for dask's default 8787
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address="127.0.0.1:0", env=env, silence_logs=40,
+                                   preload=[_IGNORE_CTRL_C])
+            client = Client(cluster)
+    except BaseException:  # Ctrl-C delivered as the block ends: close what was started
+        _close(client, cluster)
+        raise
+    return client, cluster
+
+
+def _close(client, cluster) -> None:
+    """Close the client and the local cluster; a second Ctrl-C waits until they are closed."""
+    with _sigint_blocked():
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def run_study(study: Study, out, scheduler: str | None = None, workers: int = 2,
@@ -246,13 +294,12 @@ def run_study(study: Study, out, scheduler: str | None = None, workers: int = 2,
                 if progress is not None:
                     progress(len(done) + computed, len(samples))
         except BaseException:
-            for f in futures:
-                f.cancel()
+            with _sigint_blocked():
+                for f in futures:
+                    f.cancel()
             raise
         finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            _close(client, cluster)
     wall = time.perf_counter() - t0
     rows = read_rows(folder, keys)
     _write_table(folder, rows)

@@ -232,6 +232,14 @@ def _number(value, file, where) -> float:
     return float(value)
 
 
+def _value_kind(value) -> str:
+    if isinstance(value, bool):
+        return "booleans"
+    if isinstance(value, int | float):
+        return "numbers"
+    return "texts" if isinstance(value, str) else f"{type(value).__name__}s"
+
+
 def _variation(path: str, table, file) -> Variation:
     where = f'[vary."{path}"]'
     if not isinstance(table, dict):
@@ -261,6 +269,11 @@ def _variation(path: str, table, file) -> Variation:
             raise _err(file, f"{where} values", f"{values!r}", "give a non-empty list")
         if relative:
             values = [_number(v, file, f"{where} values") for v in values]
+        kinds = sorted({_value_kind(v) for v in values})
+        if len(kinds) > 1:
+            raise _err(file, f"{where} values", f"{values!r} mixes {' and '.join(kinds)}",
+                       "give values of one kind (the field's: numbers without quotes for a "
+                       "number)")
         return Variation(path, tuple(values), relative=relative)
     if kind == "grid":
         grid = table["grid"]
@@ -304,13 +317,18 @@ def _variation(path: str, table, file) -> Variation:
     return Variation(path, (), name, tuple(params), relative)
 
 
-def load_study(path) -> Study:
+def load_study(path, check_axes: bool = True) -> Study:
     """Read and check a study file.
 
     Parameters
     ----------
     path : str or os.PathLike
         The study's TOML file.
+    check_axes : bool, optional
+        Also check the study against its axes (default): every axis file parsed, every
+        varied path resolved, every value's type and the values the axis loader refuses
+        (:func:`servotune.study.validate.check_study`), so that a bad study ends before any
+        sample runs.
 
     Returns
     -------
@@ -320,7 +338,7 @@ def load_study(path) -> Study:
     Raises
     ------
     StudyFormatError
-        With the file, the field and the fix.
+        With the file, the field and the fix (an axis file's syntax error with its line).
     """
     file = Path(path)
     if not file.is_file():
@@ -387,10 +405,15 @@ def load_study(path) -> Study:
     if not isinstance(vary, dict):
         raise _err(file, "[vary]", "is not a table", 'write [vary."section.key"] tables')
     variations = tuple(_variation(p, t, file) for p, t in vary.items())
-    return Study(name=name, file=file.resolve(), axes=tuple(folders), variations=variations,
-                 compute=tuple(c for c in COMPUTE if c in compute), samples=samples, seed=seed,
-                 starts=starts, design=design, design_file=design_file, chatter_weight=weight,
-                 tables=data)
+    study = Study(name=name, file=file.resolve(), axes=tuple(folders), variations=variations,
+                  compute=tuple(c for c in COMPUTE if c in compute), samples=samples,
+                  seed=seed, starts=starts, design=design, design_file=design_file,
+                  chatter_weight=weight, tables=data)
+    if check_axes:
+        from .validate import check_study, read_axis_tables
+
+        check_study(study, {a: read_axis_tables(a, file) for a in study.axes})
+    return study
 
 
 def _read_design(path: str, file) -> dict:

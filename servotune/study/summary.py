@@ -1,9 +1,10 @@
 """What a person reads of a study: a summary, figures against each varied field, one page.
 
-The summary counts the samples (done, failed, verified), gives the spread (min, median, max)
-of every result column, and lists the failures with their reasons. The figures put the
-realised compliance peak (the nonlinear one when the study verified, else the linear claim)
-and the chatter limit against each varied field, and the spread of the tuned gains.
+The summary counts the samples (run, failed, verified; shares over the samples run), gives
+the spread (min, median, max) of every result column, and lists the failures with their
+reasons. The figures put the realised compliance peak (the nonlinear one when the study
+verified, else the linear claim) and the chatter limit against each varied field, and the
+spread of the tuned gains.
 """
 
 from __future__ import annotations
@@ -38,9 +39,47 @@ class StudySummary:
     inputs: tuple = ()              # the varied fields (dotted paths)
 
     @property
+    def finished(self) -> int:
+        """Samples run to their end, done or failed (fewer than ``samples`` while the study is
+        interrupted or still running)."""
+        return self.done + self.failed
+
+    @property
     def verified_share(self) -> float | None:
-        """Verified over done samples [-]; None when not verified or none is done."""
-        return None if self.verified is None or not self.done else self.verified / self.done
+        """Verified over the samples run (done or failed) [-]; None when the study did not
+        verify or none has run."""
+        if self.verified is None or not self.finished:
+            return None
+        return self.verified / self.finished
+
+    def counts(self) -> str:
+        """Return the counts in words, e.g. ``"2 of 2 samples run: 1 of 2 verified (50 %),
+        1 failed"``; shares are over the samples run, failures counted beside.
+
+        Returns
+        -------
+        str
+            The line the command prints and the page shows.
+
+        Examples
+        --------
+        >>> StudySummary(samples=3, done=1, failed=1, verified=1).counts()
+        '2 of 3 samples run (1 not run): 1 of 2 verified (50 %), 1 failed'
+        >>> StudySummary(samples=2, done=2, failed=0, verified=None).counts()
+        '2 of 2 samples run: 2 done, 0 failed'
+        """
+        n = self.finished
+        text = f"{n} of {self.samples} samples run"
+        if n < self.samples:
+            text += f" ({self.samples - n} not run)"
+        if self.verified is None:
+            return text + f": {self.done} done, {self.failed} failed"
+        text += f": {self.verified} of {n} verified"
+        if n:
+            text += f" ({100.0 * self.verified / n:.0f} %)"
+        if self.done > self.verified:
+            text += f", {self.done - self.verified} not verified"
+        return text + f", {self.failed} failed"
 
     def to_dict(self) -> dict:
         """Return the summary as a JSON-ready dictionary.
@@ -50,8 +89,9 @@ class StudySummary:
         dict
             JSON-ready values (SI; str, numbers, lists, None).
         """
-        return {"samples": self.samples, "done": self.done, "failed": self.failed,
-                "verified": self.verified, "verified_share": self.verified_share,
+        return {"samples": self.samples, "finished": self.finished, "done": self.done,
+                "failed": self.failed, "verified": self.verified,
+                "verified_share": self.verified_share, "counts": self.counts(),
                 "spreads": self.spreads,
                 "failures": [{"sample_id": i, "error": e} for i, e in self.failures],
                 "inputs": list(self.inputs)}
@@ -190,9 +230,7 @@ def summary_html(study, run, summary: StudySummary, figures) -> str:
     import base64
 
     esc = html.escape
-    share = summary.verified_share
-    head = (f"{summary.done} of {summary.samples} samples done, {summary.failed} failed"
-            + ("" if share is None else f"; {summary.verified} verified ({share:.0%} of done)"))
+    head = summary.counts()
     varied = "".join(
         f"<tr><td>{esc(v.path)}</td><td>"
         + esc(f"{v.distribution} {dict(v.parameters)}" if v.random else str(list(v.values)))

@@ -33,8 +33,11 @@ def _axis(settings: dict, sample: dict, applied: dict):
     from .spec import apply_values
 
     file = Path(sample["axis"]) / "axis.toml"
-    with open(file, "rb") as handle:
-        tables = tomllib.load(handle)
+    try:
+        with open(file, "rb") as handle:
+            tables = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:  # changed since the study was checked
+        raise ValueError(f"{file}: not valid TOML: {exc}; fix the syntax there") from None
     relative = set(settings.get("relative", ()))
     values = list(sample["values"].items())
     return axis_from_tables(apply_values(tables, values, lambda p: p in relative, applied),
