@@ -481,6 +481,10 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
     except AxisFormatError:
         raise
     except ValueError as exc:
+        if "damping_ratio has" in str(exc):
+            raise _err(file, "[structure] modal_damping", str(exc).replace(
+                "ModalModel.damping_ratio", "modal_damping"),
+                "give one ratio (e.g. 0.03) or a list with one per mode of the model") from None
         raise _err(file, "[structure]", str(exc), "fix the matrices or the settings") from None
 
 

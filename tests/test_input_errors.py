@@ -72,3 +72,70 @@ def test_an_input_error_is_one_json_object_under_json(tmp_path, capsys):
     out = json.loads(captured.out)
     assert out["status"] == "error" and out["error_kind"] in ("input", "file")
     assert out["error"] in captured.err and "nowhere" in out["error"]
+
+
+def test_structure_files_and_settings_are_named_in_their_errors(tmp_path):
+    """The starter axis' structure.npz broken three ways, and a damping list of the wrong
+    length: each error names the file or field and what is wrong, in the project's words
+    (not numpy's)."""
+    import numpy as np
+
+    folder = _starter(tmp_path)
+    npz = folder / "structure.npz"
+    data = dict(np.load(npz))
+    n = data["mass"].shape[0]
+    cases = [
+        (lambda: npz.write_text("garbage"), "not an .npz archive"),
+        (lambda: np.savez(npz, **{**data, "mass": data["mass"].astype(str)}),
+         "mass is not a real 2-D matrix"),
+        (lambda: np.savez(npz, **{k: v for k, v in data.items() if k != "stiffness"}),
+         "no matrix 'stiffness'"),
+    ]
+    for write, words in cases:
+        write()
+        with pytest.raises(AxisFormatError) as err:
+            load_axis(folder)
+        assert "structure.npz" in str(err.value) and words in str(err.value)
+    np.savez(npz, **data)
+    toml = folder / "axis.toml"
+    toml.write_text(toml.read_text().replace("modal_damping = 0.03 ",
+                                             "modal_damping = [0.03, 0.02] ", 1))
+    with pytest.raises(AxisFormatError) as err:
+        load_axis(folder)
+    text = str(err.value)
+    assert "[structure] modal_damping" in text and f"2 values for {n} modes" in text
+    assert "broadcast" not in text
+
+
+def test_a_dof_map_direction_that_is_none_is_refused(tmp_path):
+    from servotune.structure.io import MatrixFileError, read_dof_map
+
+    good = tmp_path / "good.csv"
+    good.write_text("node,dof\n12,UX\n12,ROTZ\n13,3\n")
+    assert read_dof_map(good) == ("12.ux", "12.rotz", "13.3")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("node,dof\n12,UX\n12,UQ\n")
+    with pytest.raises(MatrixFileError, match=r"row 2 .*'UQ'"):
+        read_dof_map(bad)
+
+
+def test_rigid_body_mass_needs_every_node(tmp_path):
+    """Coordinates of one node of two: the rigid-body 'mass' would count only that node's
+    (half of the true total here); refused, naming the missing node. With both, the
+    rigid-body mass in X is the total mass (hand sum)."""
+    import numpy as np
+
+    from servotune.structure import ModalModel
+    from servotune.structure.cbcheck import cb_check
+
+    m = np.diag([2.0, 2.0, 2.0, 3.0, 3.0, 3.0])
+    k = np.zeros((6, 6))
+    k[np.ix_([0, 3], [0, 3])] = [[1e6, -1e6], [-1e6, 1e6]]
+    for a in (1, 2):
+        k[np.ix_([a, a + 3], [a, a + 3])] = [[1e6, -1e6], [-1e6, 1e6]]
+    dofs = ["1.x", "1.y", "1.z", "2.x", "2.y", "2.z"]
+    model = ModalModel(m, k, dofs)
+    with pytest.raises(ValueError, match=r"cover 1 of the 2 nodes .*'2'"):
+        cb_check(model, coordinates={"1": (0.0, 0.0, 0.0)})
+    check = cb_check(model, coordinates={"1": (0.0, 0.0, 0.0), "2": (1.0, 0.0, 0.0)})
+    assert check.rigid_body_mass[0, 0] == pytest.approx(5.0)

@@ -217,7 +217,7 @@ def test_dof_map_of_the_wrong_length(tmp_path, pair):
 
 @pytest.mark.parametrize("name, content, message", [
     ("m.mtx", "this is not a matrix\n", "not a readable MatrixMarket file"),
-    ("m.npz", "garbage", "cannot read as .npz"),
+    ("m.npz", "garbage", "not an .npz archive"),
     ("m.mat", "garbage", "cannot read as a MATLAB file"),
     ("m.hb", "too short\n", "not a Harwell-Boeing file"),
     ("m.xyz", "1 2 3", "unknown matrix file type"),

@@ -309,6 +309,18 @@ def cb_check(model, stiffness=None, dofs=None, *, coordinates=None, rigid_body=N
     if rigid_body is not None and coordinates is not None:
         raise ValueError("give either coordinates or rigid_body, not both")
     if coordinates is not None:
+        covered = {str(k) for k in dict(coordinates)}
+        nodes = {str(names[i]).rpartition(".")[0] for i in b
+                 if normalise_direction(str(names[i]).rpartition(".")[2]) is not None}
+        missing = sorted(nodes - covered)
+        if missing and nodes & covered:
+            # a rigid-body motion of part of the nodes is no rigid-body motion: its "mass"
+            # would count only theirs
+            raise ValueError(f"the coordinates cover {len(nodes & covered)} of the "
+                             f"{len(nodes)} nodes of the boundary DOFs (missing "
+                             f"{missing[:8]}{' ...' if len(missing) > 8 else ''}): the "
+                             "rigid-body mass needs every node's position; give coordinates "
+                             "of all of them")
         r = rigid_body_vectors([names[i] for i in b], coordinates, reference)
         directions = ("X", "Y", "Z", "RX", "RY", "RZ") if directions is None else directions
         used = np.abs(r).sum(axis=0) > 0

@@ -44,6 +44,7 @@ import io
 import os
 import re
 import tempfile
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,7 +55,7 @@ import scipy.sparse.linalg
 
 from ..tablefile import TableFileError, read_table
 from .model import ModalModel, UnknownDofError
-from .ports import PortError, name_ports, normalise_node
+from .ports import PortError, name_ports, normalise_direction, normalise_node
 
 __all__ = [
     "MatrixFileError",
@@ -239,6 +240,9 @@ def _from_npz(path, name):
     try:
         data = np.load(path, allow_pickle=False)
     except (OSError, ValueError) as exc:
+        if not zipfile.is_zipfile(path):
+            raise MatrixFileError(f"{path}: not an .npz archive (numpy.savez writes one: a zip "
+                                  "of .npy arrays)") from None
         raise MatrixFileError(f"{path}: cannot read as .npz ({exc})") from None
     with data:
         keys = set(data.files)
@@ -291,7 +295,8 @@ def read_matrix(path, name: str | None = None):
     suffix = path.suffix.lower()
     try:
         if suffix == ".npz":
-            a = _from_npz(path, name or "mass")
+            name = name or "mass"
+            a = _from_npz(path, name)
         elif suffix in _MTX:
             try:
                 a = scipy.io.mmread(path)
@@ -344,7 +349,7 @@ def read_dof_map(path) -> tuple[str, ...]:
     ------
     MatrixFileError
         When the file cannot be read or is empty, lacks the columns, has a bad ``index``, an
-        empty or a duplicate name.
+        empty or a duplicate name, or a ``dof`` that is no direction.
     """
     table = read_table(path, "DOF map", hint="a header row, then one row per DOF",
                        error=MatrixFileError)
@@ -352,8 +357,15 @@ def read_dof_map(path) -> tuple[str, ...]:
     if table.has("name"):
         names = table.text("name")
     elif table.has("node", "dof"):
+        codes = table.text("dof")
+        for row, code in enumerate(codes):
+            if normalise_direction(code) is None:
+                raise MatrixFileError(
+                    f"{path}: row {row + 1} of the DOF map has the direction {code!r}, which "
+                    "is none of x, y, z, rx, ry, rz (or UX, ..., ROTX, ..., T1-T3, R1-R3, or "
+                    "the component numbers 1-6); fix the 'dof' column")
         names = [f"{normalise_node(n)}.{d.lower()}"
-                 for n, d in zip(table.text("node"), table.text("dof"), strict=True)]
+                 for n, d in zip(table.text("node"), codes, strict=True)]
     else:
         raise table.error("the DOF map needs a 'name' column or 'node' and 'dof' columns, "
                           f"found {list(table.header)}")

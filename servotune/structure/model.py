@@ -248,7 +248,12 @@ class ModalModel:
                 raise ValueError("damping matrix is indefinite: it would inject energy")
             zeta = np.full(n, np.nan)
         else:
-            zeta = np.broadcast_to(np.asarray(self.damping_ratio, dtype=float), (n,)).copy()
+            given = np.asarray(self.damping_ratio, dtype=float)
+            if given.ndim > 1 or (given.ndim == 1 and given.size not in (1, n)):
+                raise ValueError(f"ModalModel.damping_ratio has {given.size} values for {n} "
+                                 f"modes; give one ratio for every mode, or one per mode "
+                                 f"({n} values, lowest mode first)")
+            zeta = np.broadcast_to(given, (n,)).copy()
             if not np.all(np.isfinite(zeta)) or np.any(zeta < 0.0) or np.any(zeta >= 1.0):
                 raise ValueError(f"ModalModel.damping_ratio must lie in [0, 1), got "
                                  f"{self.damping_ratio!r}; give one ratio, or one per mode")
