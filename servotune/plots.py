@@ -15,6 +15,13 @@ from . import twomass
 from .units import HZ_PER_RAD_S
 
 __all__ = [
+    "BODE_PHASE_RANGE_DEG",
+    "wrapped_phase_deg",
+    "drawn_labels",
+    "figure_caption",
+    "ls_name",
+    "set_caption",
+    "style_key",
     "plot_bode",
     "plot_compliance",
     "plot_energies",
@@ -33,6 +40,92 @@ __all__ = [
     "plot_two_mass_compliance",
 ]
 
+
+
+#: names of matplotlib's line styles, for captions
+_LINE_STYLES = {"-": "solid", "solid": "solid", "--": "dashed", "dashed": "dashed",
+                ":": "dotted", "dotted": "dotted", "-.": "dash-dotted", "dashdot": "dash-dotted"}
+
+
+def ls_name(ls: str) -> str:
+    """The name of a matplotlib line style (``"--"``: ``"dashed"``)."""
+    return _LINE_STYLES.get(ls, str(ls))
+
+
+def set_caption(fig: Figure, text: str) -> Figure:
+    """Attach a caption to a figure (read back with :func:`figure_caption`).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    text : str
+        What the figure draws, which regime or model, and what its line styles mean.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``.
+    """
+    fig.servotune_caption = str(text)
+    return fig
+
+
+def figure_caption(fig: Figure) -> str:
+    """Return the caption a plotting function attached to its figure ("" without one).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+
+    Returns
+    -------
+    str
+        The caption.
+    """
+    return getattr(fig, "servotune_caption", "")
+
+
+def drawn_labels(ax) -> list[str]:
+    """The legend labels of the lines drawn in an axes (with data; hidden labels left out).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+
+    Returns
+    -------
+    list of str
+        The labels, in drawing order.
+    """
+    return [line.get_label() for line in ax.get_lines()
+            if not line.get_label().startswith("_") and len(line.get_xdata()) > 0]
+
+
+def style_key(ax) -> list[str]:
+    """What the line styles of an axes mean, from the curves drawn there (two points or more,
+    with a legend label): ``["solid: after, standing", "dashed: before, standing"]``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+
+    Returns
+    -------
+    list of str
+        One entry per line style drawn, naming its curves.
+    """
+    groups: dict[str, list[str]] = {}
+    for line in ax.get_lines():
+        label = line.get_label()
+        if label.startswith("_") or len(line.get_xdata()) < 2 or line.get_linestyle() in (
+                "None", "", " ", "none"):
+            continue
+        groups.setdefault(ls_name(line.get_linestyle()), []).append(label)
+    return [f"{style} ({len(labels)}): {', '.join(labels)}" for style, labels in groups.items()]
 
 
 def plot_g_alpha(alpha_max: float = 1.0, mark: float | None = None) -> Figure:
@@ -117,6 +210,14 @@ def plot_two_mass_compliance(analysis: twomass.TwoMassAnalysis, f_max_hz: float 
     ax_ph.set_xlim(0.0, f_max_hz)
     ax_ph.set_yticks(np.arange(-180, 1, 45))
     ax_ph.grid(True, alpha=0.4)
+    set_caption(fig, f"Two-mass layout {system.layout} (M1 = {system.m1:g} kg, K = "
+                     f"{system.k:g} N/m, alpha = {system.alpha:g}): magnitude and phase of "
+                     f"the work-piece compliance x2/f2 for C = Copt x 10^k, k = "
+                     f"{-decades}..{decades}, Copt = {analysis.c_opt:.4g} N s/m (the thick "
+                     f"black curve), as in the paper's Fig 5; solid lines: "
+                     f"{', '.join(drawn_labels(ax_mag)[:2 * decades + 1])}".replace(
+                         "($C_{opt}$)", "(Copt)") + ". Green squares: "
+                     "the fixed points every curve passes through.")
     return fig
 
 
@@ -412,6 +513,17 @@ def plot_stability_lobes(results, required_depth: float | None = None,
     ax.set_title(title, fontsize=10)
     ax.grid(True, alpha=0.4)
     ax.legend(fontsize=8, loc="upper left")
+    text = [f"Stability lobes: the axial depth of cut b_lim [mm] at which the cut starts to "
+            f"chatter, over the spindle speed ({setup.teeth} teeth, radial immersion a/D = "
+            f"{setup.radial_immersion:g}, {setup.milling}-milling); "
+            + "; ".join(style_key(ax)) + "."]
+    if any(res.method == "zoa" and res.lobe_speed_rpm.size for res in results):
+        text.append("Thin lines: the individual lobes of the zero-order approximation.")
+    text.append("Dots: each limit's smallest depth b_crit; shaded: unstable (chatter) above "
+                "the first limit.")
+    if required_depth is not None:
+        text.append(f"Orange: the required depth {1e3 * required_depth:.3g} mm.")
+    set_caption(fig, " ".join(text))
     return fig
 
 
@@ -464,9 +576,45 @@ def plot_stability_map(stability_map, zoa=None, title: str | None = None) -> Fig
     return fig
 
 
+def wrapped_phase_deg(values) -> np.ndarray:
+    """The phase of L [deg] wrapped into (-360, 0], with NaN where it wraps (so that a line
+    drawn through it breaks there instead of jumping by a turn).
+
+    In (-360, 0] every phase crossover of the loop is a crossing of the -180 deg line and
+    the phase at the gain crossover is the phase margin less 180 deg.
+
+    Parameters
+    ----------
+    values : array_like
+        L(j omega), complex.
+
+    Returns
+    -------
+    numpy.ndarray
+        The wrapped phase [deg] (float; NaN at the first point after each wrap).
+    """
+    phase = np.degrees(np.unwrap(np.angle(np.asarray(values).reshape(-1))))
+    wrapped = phase - 360.0 * np.ceil(phase / 360.0)
+    jumps = np.nonzero(np.abs(np.diff(wrapped)) > 180.0)[0] + 1
+    wrapped[jumps] = np.nan
+    return wrapped
+
+
+#: the phase range a Bode figure shows [deg]: the wrapped phase, where the margins are read
+BODE_PHASE_RANGE_DEG = (-360.0, 0.0)
+
+
 def plot_bode(loops, analyses=None, title: str = "Loop transfer functions",
-              styles=None) -> Figure:
+              styles=None, regime: str | None = None) -> Figure:
     """Bode diagram of loop transfer functions with their margins marked.
+
+    The phase is wrapped into (-360, 0] (:func:`wrapped_phase_deg`; the line breaks where it
+    wraps), so that every phase crossover is a crossing of -180 deg and the phase at the gain
+    crossover is the phase margin less 180 deg. Marked for each loop with an
+    analysis: the gain crossover (dot at 0 dB) and, on the phase, the phase margin as a bar
+    up from -180 deg; the phase crossover (square at -180 deg) and, on the magnitude, the gain
+    margin as a bar from |L| to 0 dB; where the sensitivity peaks (Ms, diamond on |L|). The
+    figure's caption (:func:`figure_caption`) lists what was drawn.
 
     Parameters
     ----------
@@ -478,6 +626,8 @@ def plot_bode(loops, analyses=None, title: str = "Loop transfer functions",
         The title.
     styles : dict, optional
         ``{name: (colour, line style)}`` (default: a colour per loop, solid lines).
+    regime : str, optional
+        The regime model the loops are of, named in the title and the caption.
 
     Returns
     -------
@@ -487,36 +637,84 @@ def plot_bode(loops, analyses=None, title: str = "Loop transfer functions",
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
     colors = ["tab:blue", "tab:red", "tab:green", "tab:purple"]
+    lo, hi = BODE_PHASE_RANGE_DEG
+    marked = []
     for i, (name, (omega, values)) in enumerate(loops.items()):
-        f_hz = np.asarray(omega) * HZ_PER_RAD_S
+        omega = np.asarray(omega, dtype=float)
+        f_hz = omega * HZ_PER_RAD_S
         values = np.asarray(values).reshape(-1)
         color, ls = (styles or {}).get(name, (colors[i % len(colors)], "-"))
-        ax_mag.semilogx(f_hz, 20 * np.log10(np.abs(values)), color=color, lw=1.5, ls=ls,
-                        label=f"{name} loop")
-        ax_ph.semilogx(f_hz, np.degrees(np.unwrap(np.angle(values))), color=color, lw=1.5,
-                       ls=ls)
         a = (analyses or {}).get(name)
+        phase = wrapped_phase_deg(values)
+        mag_db = 20 * np.log10(np.abs(values))
+        ax_mag.semilogx(f_hz, mag_db, color=color, lw=1.5, ls=ls, label=f"{name} loop")
+        ax_ph.semilogx(f_hz, phase, color=color, lw=1.5, ls=ls, label=f"{name} loop")
         if a is None:
             continue
-        label = (f"{name}: PM {a.phase_margin_deg:.1f} deg"
-                 + (f", GM {a.gain_margin_db:.1f} dB" if math.isfinite(a.gain_margin) else "")
-                 + f", Ms {a.ms:.2f}")
+        parts = []
+        solid = ls in ("-", "solid")
         if math.isfinite(a.crossover):
-            ax_mag.plot([a.crossover * HZ_PER_RAD_S], [0.0], "o", color=color, ms=6,
-                        label=label)
+            fc = a.crossover * HZ_PER_RAD_S
+            at = a.phase_margin_deg - 180.0   # the wrapped phase at the crossover
+            parts.append(f"PM {a.phase_margin_deg:.1f} deg at {fc:.3g} Hz")
+            ax_mag.plot([fc], [0.0], "o", color=color, ms=6,
+                        label=f"{name}: " + ", ".join(
+                            [parts[0]]
+                            + ([f"GM {a.gain_margin_db:.1f} dB"]
+                               if math.isfinite(a.gain_margin) else [])
+                            + [f"Ms {a.ms:.2f}"]))
+            ax_ph.plot([fc, fc], [-180.0, at], color=color, lw=3.0, alpha=0.6,
+                       solid_capstyle="butt", label=f"_{name}: phase margin")
+            if solid:
+                ax_ph.annotate(f"PM {a.phase_margin_deg:.0f}\N{DEGREE SIGN}", (fc, at),
+                               textcoords="offset points", xytext=(4, 4), fontsize=7,
+                               color=color)
         else:
-            ax_mag.plot([], [], "o", color=color, label=label)
+            ax_mag.plot([], [], "o", color=color, label=f"{name}: no gain crossover, "
+                                                        f"Ms {a.ms:.2f}")
+            parts.append("no gain crossover")
         if math.isfinite(a.phase_crossover):
-            ax_mag.axvline(a.phase_crossover * HZ_PER_RAD_S, color=color, ls=":", lw=1.0)
+            fp = a.phase_crossover * HZ_PER_RAD_S
+            level = float(np.interp(np.log(a.phase_crossover), np.log(omega), mag_db))
+            ax_ph.plot([fp], [-180.0], "s", color=color, ms=5, mfc="none",
+                       label=f"_{name}: phase crossover")
+            if math.isfinite(a.gain_margin):
+                ax_mag.plot([fp, fp], [level, 0.0], color=color, lw=3.0, alpha=0.6,
+                            solid_capstyle="butt", label=f"_{name}: gain margin")
+                parts.append(f"GM {a.gain_margin_db:.1f} dB at {fp:.3g} Hz")
+                if solid:
+                    ax_mag.annotate(f"GM {a.gain_margin_db:.0f} dB", (fp, level),
+                                    textcoords="offset points", xytext=(4, -10), fontsize=7,
+                                    color=color)
+        if math.isfinite(a.ms_frequency):
+            fm = a.ms_frequency * HZ_PER_RAD_S
+            level = float(np.interp(np.log(a.ms_frequency), np.log(omega), mag_db))
+            ax_mag.plot([fm], [level], "D", color=color, ms=5, mfc="white",
+                        label=f"_{name}: Ms")
+            parts.append(f"Ms {a.ms:.2f} at {fm:.3g} Hz")
+        marked.append(f"{name} ({ls_name(ls)}): " + ", ".join(parts))
     ax_mag.axhline(0.0, color="k", lw=0.8)
     ax_mag.set_ylabel("|L| [dB]")
-    ax_mag.set_title(title)
+    ax_mag.set_title(title if regime is None else f"{title}\n{regime}", fontsize=10)
     ax_mag.grid(True, which="both", alpha=0.4)
-    ax_mag.legend(fontsize=8)
+    ax_mag.legend(fontsize=7)
     ax_ph.axhline(-180.0, color="k", lw=0.8)
+    ax_ph.set_ylim(lo - 10.0, hi + 10.0)
+    ax_ph.set_yticks(np.arange(lo, hi + 1, 90.0))
     ax_ph.set_ylabel("phase of L [deg]")
     ax_ph.set_xlabel("frequency [Hz]")
     ax_ph.grid(True, which="both", alpha=0.4)
+    sentences = ["Bode diagram of the loop transfer functions L"
+                 + (f" in the regime model {regime}" if regime else "") + ": "
+                 + ("; ".join(style_key(ax_mag)) or "no loop drawn") + "."]
+    if marked:
+        sentences += ["Margins: " + "; ".join(marked) + ".",
+                      "Dots: gain crossover (0 dB); bars: the phase margin (up from -180 deg) "
+                      "and the gain margin (from |L| up to 0 dB); squares: phase crossover; "
+                      "diamonds: where the sensitivity peaks (Ms)."]
+    sentences.append(f"The phase is wrapped into ({lo:g}, {hi:g}] deg (the line breaks where "
+                     "it wraps): every crossing of -180 deg is a phase crossover.")
+    set_caption(fig, " ".join(sentences))
     return fig
 
 
@@ -677,44 +875,138 @@ def plot_pad_hysteresis(result, pad: str, t_start: float = 0.0, t_end: float | N
     return fig
 
 
-def plot_mode_peaks(mode_peaks) -> Figure:
+#: a point of a mode's track this many times both its neighbours is drawn on its own
+SPIKE_FACTOR = 2.0
+
+
+def plot_mode_peaks(mode_peaks, bounds=None, axis_name: str | None = None) -> Figure:
     """Draw the compliance peak of each work-piece mode against the guide-way damping C.
 
-    Different modes ask for different optimal C (sec 5.2); the chosen C is marked.
+    Different modes ask for different optimal C (sec 5.2); the chosen C is marked. Each
+    track's smallest peak is marked as its best C only where it lies inside the grid; at an
+    end of the grid (a bound of C) or where the track ends (the mode turns over-damped or
+    jumps) it is said so instead. A point more than :data:`SPIKE_FACTOR` times both its
+    neighbours is drawn as a cross, not joined to them: there two closed-loop poles come
+    close, where the split of the compliance into one term per mode is ill-conditioned (the
+    terms grow and cancel in the sum), so it is no peak of the compliance. Where two tracks
+    follow the same pole (the modes have merged) the later one is drawn once.
 
     Parameters
     ----------
     mode_peaks : servotune.design.ModePeaks
         From :func:`servotune.design.mode_peaks_vs_damping`.
+    bounds : (float, float), optional
+        The bounds of C [N s/m] the grid spans (default: the grid's ends), named in the
+        labels.
+    axis_name : str, optional
+        The axis, named in the title and the caption.
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure.
+        The figure (its caption: :func:`figure_caption`).
     """
     fig = Figure(figsize=(8.0, 5.0), layout="constrained")
     ax = fig.add_subplot()
-    c = mode_peaks.c_values
+    c = np.asarray(mode_peaks.c_values, dtype=float)
+    peaks = np.asarray(mode_peaks.peaks, dtype=float)
+    lo, hi = (c[0], c[-1]) if bounds is None else (float(bounds[0]), float(bounds[1]))
+    bound_word = "bound" if bounds is not None else "end of the grid"
     i = int(np.argmin(np.abs(np.log(c / mode_peaks.c_chosen))))
-    for m in range(mode_peaks.peaks.shape[0]):
+    notes, spikes_total = [], 0
+    for m in range(peaks.shape[0]):
         f = mode_peaks.frequencies[m, i] * HZ_PER_RAD_S
-        (line,) = ax.loglog(c, mode_peaks.peaks[m], lw=1.6,
-                            label=f"mode at {f:.0f} Hz (at the chosen C); best C = "
-                                  f"{mode_peaks.c_best[m]:.2g} N s/m")
-        j = int(np.nanargmin(mode_peaks.peaks[m]))
-        ax.plot([c[j]], [mode_peaks.peaks[m, j]], "o", color=line.get_color())
+        row = peaks[m].copy()
+        finite = np.isfinite(row)
+        # a track that follows the same pole as an earlier one: drawn once, said so
+        same = np.zeros_like(finite)       # on an earlier track's pole: drawn there
+        shared = np.zeros_like(finite)     # on any other track's pole
+        merged_with = None
+        for k in range(peaks.shape[0]):
+            if k == m:
+                continue
+            eq = finite & np.isfinite(peaks[k]) & np.isclose(row, peaks[k], rtol=1e-9, atol=0.0)
+            if eq.any():
+                shared |= eq
+                merged_with = mode_peaks.frequencies[k, i] * HZ_PER_RAD_S
+                if k < m:
+                    same |= eq
+        spike = np.zeros_like(finite)
+        for j in range(1, len(row) - 1):
+            if finite[j - 1] and finite[j] and finite[j + 1]:
+                spike[j] = row[j] > SPIKE_FACTOR * max(row[j - 1], row[j + 1])
+        spikes_total += int(spike.sum())
+        track = np.where(spike | ~finite, np.nan, row)
+        shown = np.where(same, np.nan, track)
+        if same.any():   # keep the joining point so that the track reaches the merge
+            first = int(np.argmax(same))
+            shown[first] = track[first]
+        ok = np.isfinite(track)
+        if not ok.any():
+            continue
+        j = int(np.nanargmin(track))
+        cb = c[j]
+        last = int(np.nonzero(ok)[0][-1])
+        first_ok = int(np.nonzero(ok)[0][0])
+        if j == len(c) - 1 or (np.isclose(cb, hi, rtol=1e-9, atol=0.0) and j == last):
+            where = f"falls up to the upper {bound_word} C = {hi:.3g} N s/m (no minimum inside)"
+            marker = ">"
+        elif j == 0 or (np.isclose(cb, lo, rtol=1e-9, atol=0.0) and j == first_ok):
+            where = f"rises from the lower {bound_word} C = {lo:.3g} N s/m (no minimum inside)"
+            marker = "<"
+        elif shared[j] and not shared[j - 1]:
+            where = (f"smallest where its track meets the {merged_with:.0f} Hz one, "
+                     f"C = {cb:.2g} N s/m")
+            marker = "s"
+        elif j == last:
+            where = f"smallest where its track ends (the mode is lost beyond), C = {cb:.2g} N s/m"
+            marker = "s"
+        else:
+            where = f"best C = {cb:.2g} N s/m"
+            marker = "o"
+        (line,) = ax.loglog(c, shown, lw=1.6, label=f"mode at {f:.0f} Hz (at the chosen C): "
+                                                      f"{where}")
+        ax.plot([cb], [track[j]], marker, color=line.get_color(), ms=7,
+                label=f"_{f:.0f} Hz: {where}")
+        if spike.any():
+            ax.plot(c[spike], row[spike], "x", color=line.get_color(), ms=7, mew=1.6,
+                    label=f"{f:.0f} Hz mode: near-coincident poles ({int(spike.sum())} point"
+                          f"{'s' if spike.sum() > 1 else ''})")
+        notes.append(f"the {f:.0f} Hz mode {where}")
+        if same.any():
+            notes.append(f"from C = {c[np.argmax(same)]:.2g} N s/m the {f:.0f} Hz track "
+                         f"follows the same pole as the {merged_with:.0f} Hz one (the nearest "
+                         "pole is followed, so one of the two modes is lost there; drawn once)")
     ax.axvline(mode_peaks.c_chosen, color="k", ls="--", lw=1.0,
                label=f"chosen C = {mode_peaks.c_chosen:.3g} N s/m")
     ax.set_xlabel("guide-way damping C [N s/m]")
     ax.set_ylabel("peak of the mode's compliance term [m/N]")
-    ax.set_title("Several modes, one C: each mode's compliance peak against C (sec 5.2)")
+    head = "Several modes, one C: each mode's compliance peak against C (sec 5.2)"
+    ax.set_title(head if axis_name is None else f"{axis_name}: {head}", fontsize=10)
     ax.grid(True, which="both", alpha=0.4)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
+    text = [f"{'The axis ' + axis_name + ': e' if axis_name else 'E'}ach closed-loop mode's "
+            f"own compliance peak |R|/|Re lambda| against the guide-way damping C, on "
+            f"{len(c)} values of C from {c[0]:.3g} to {c[-1]:.3g} N s/m (the tuned design's "
+            f"gains); solid: the tracks; dashed vertical: the chosen C "
+            f"{mode_peaks.c_chosen:.3g} N s/m; dots: a minimum inside the grid, squares: the "
+            "smallest value where a track ends or meets another, triangles: the smallest value at "
+            "a bound."]
+    text += [n[0].upper() + n[1:] + "." for n in notes]
+    if spikes_total:
+        text.append(f"Crosses ({spikes_total}): points more than {SPIKE_FACTOR:g} times both "
+                    "neighbours, where two poles come close and the split into modal terms is "
+                    "ill-conditioned; not joined to the track and no peak of the compliance.")
+    set_caption(fig, " ".join(text))
     return fig
 
 
-def plot_regime_compliance(before, after, band=None, title: str | None = None) -> Figure:
+def plot_regime_compliance(before, after, band=None, title: str | None = None,
+                           not_drawn=()) -> Figure:
     """Work-piece compliance of every regime model, before (dashed) and after (solid) tuning.
+
+    The title (by default) and the caption (:func:`figure_caption`) say which designs have
+    curves: a design with none (unstable in every regime model) is named as not drawn.
 
     Parameters
     ----------
@@ -723,7 +1015,10 @@ def plot_regime_compliance(before, after, band=None, title: str | None = None) -
     band : (float, float), optional
         The requirement band [rad/s], shaded.
     title : str, optional
-        The title.
+        The title; default what is drawn and in which style.
+    not_drawn : sequence of str, optional
+        Curves the caller has no data for and why (``"before, standing: presliding
+        (unstable)"``), named in the caption.
 
     Returns
     -------
@@ -734,7 +1029,8 @@ def plot_regime_compliance(before, after, band=None, title: str | None = None) -
     ax = fig.add_subplot()
     colors = {}
     palette = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown"]
-    for style, curves in (("--", before), ("-", after)):
+    drawn = {}
+    for tag, style, curves in (("before", "--", before), ("after", "-", after)):
         for c in curves:
             model = c.label.split(", ", 1)[-1]
             color = colors.setdefault(model, palette[len(colors) % len(palette)])
@@ -742,66 +1038,166 @@ def plot_regime_compliance(before, after, band=None, title: str | None = None) -
                       color=color, label=c.label)
             ax.plot([c.peak_frequency * HZ_PER_RAD_S], [c.peak_compliance],
                     "o" if style == "-" else "s", color=color, ms=4, mfc="none"
-                    if style == "--" else color)
+                    if style == "--" else color, label=f"_peak of {c.label}")
+            drawn.setdefault(tag, []).append(model)
     if band is not None:
         ax.axvspan(band[0] * HZ_PER_RAD_S, band[1] * HZ_PER_RAD_S, color="0.9", zorder=0,
                    label="requirement band")
+    styles = " and ".join(f"{tag} ({'dashed' if tag == 'before' else 'solid'})"
+                          for tag in ("before", "after") if tag in drawn)
+    missing = [tag for tag in ("before", "after") if tag not in drawn]
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("|x/F| at the work piece [m/N]")
-    ax.set_title(title or "Work-piece compliance per regime: before (dashed), after (solid)",
+    ax.set_title(title or "Work-piece compliance per regime model: " + (styles or "no curve")
+                 + "".join(f"; {tag}: no stable model, not drawn" for tag in missing),
                  fontsize=10)
     ax.grid(True, which="both", alpha=0.4)
-    ax.legend(fontsize=7, ncol=2)
+    if drawn or band is not None:
+        ax.legend(fontsize=7, ncol=2)
+    text = ["Closed-loop compliance |x/F| at the work piece of each cutting regime model "
+            "(nominal friction), one colour per model: "
+            + ("; ".join(style_key(ax)) or "no curve drawn") + "."]
+    if drawn:
+        text.append("Markers: each curve's peak (hollow squares before, dots after).")
+    text += [f"No {tag} curve: the {tag} design is unstable in every regime model."
+             for tag in missing if not any(n.startswith(tag) for n in not_drawn)]
+    if not_drawn:
+        text.append("Not drawn: " + "; ".join(not_drawn) + ".")
+    if band is not None:
+        text.append(f"Shaded: the requirement band {band[0] * HZ_PER_RAD_S:.3g}-"
+                    f"{band[1] * HZ_PER_RAD_S:.3g} Hz.")
+    set_caption(fig, " ".join(text))
     return fig
 
 
-def plot_regime_verification(regimes, linear=None, title: str | None = None) -> Figure:
+def _short(text: str, n: int = 110) -> str:
+    return text if len(text) <= n else text[:n - 3].rstrip() + "..."
+
+
+def _evidence_label(e, claim) -> str:
+    where = "" if e.friction == "nominal" else f", {e.friction}"
+    why = (f"{e.peak / claim - 1:.0%} above the claim" if e.why == "above the claim" and claim
+           and math.isfinite(claim) else e.why)
+    return (f"{e.method} at {e.force_pp:.4g} N p-p{where}: {e.peak:.3g} m/N at "
+            f"{e.resonance_hz:.1f} Hz, {why}")
+
+
+def plot_regime_verification(regimes, linear=None, title: str | None = None,
+                             tolerance: float = 0.3) -> Figure:
     """The nonlinear verification: simulated sweep envelopes per regime over the linear claims.
+
+    One panel per regime: the claim (black line) and its tolerance (green band), the simulated
+    sweeps of the tuned design (solid; at the corners of the friction spread dash-dotted) and
+    of the design before (thin grey), the linear models (dashed), the periodic responses by
+    harmonic balance (hollow dots; at the corners small pluses) and, red and labelled, every
+    point that breaks the claim (:meth:`servotune.verdict.RegimeVerdict.evidence_against`).
+    A panel's title says whether the claim holds and, when not, which evidence fails it.
 
     Parameters
     ----------
     regimes : sequence of RegimeVerdict
-        From :func:`servotune.verdict.nonlinear_verdict`; their sweeps' envelopes are drawn
-        (after solid, before thin grey).
+        From :func:`servotune.verdict.nonlinear_verdict`.
     linear : dict, optional
         ``{regime: [(label, omega [rad/s], H complex), ...]}`` linear curves (dashed).
     title : str, optional
         A title over the panels.
+    tolerance : float, optional
+        The verdict's tolerance on the claim (:attr:`servotune.verdict.Verdict.tolerance`;
+        default 30 %, that of the requirements).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure.
+        The figure (its caption: :func:`figure_caption`).
     """
-    regimes = [r for r in regimes if any(s.envelope for s in r.simulations)] or list(regimes)
+    regimes = [r for r in regimes if not r.holds or any(s.envelope for s in r.simulations)
+               or r.harmonic] or list(regimes)
     n = max(len(regimes), 1)
-    fig = Figure(figsize=(8.5, 3.2 * n), layout="constrained")
+    fig = Figure(figsize=(8.5, 3.4 * n), layout="constrained")
     axes = np.atleast_1d(fig.subplots(n, 1, squeeze=False)[:, 0])
+    text = []
     for ax, r in zip(axes, regimes, strict=False):
+        counts = {"after": 0, "before": 0, "corner": 0}
         for s in r.simulations:
             if not s.envelope:
                 continue
             f_hz, amp = s.envelope
             if s.design == "after":
                 ax.loglog(f_hz, amp, lw=1.4, label=f"after, {s.force_pp:.3g} N p-p")
+                counts["after"] += 1
             else:
                 ax.loglog(f_hz, amp, lw=0.8, color="0.55",
                           label=f"before, {s.force_pp:.3g} N p-p")
+                counts["before"] += 1
+        for corner in r.corners:
+            for s in corner.simulations:
+                if s.envelope and s.kind == "sweep":
+                    f_hz, amp = s.envelope
+                    ax.loglog(f_hz, amp, "-.", lw=1.2,
+                              label=f"after, {corner.label}, {s.force_pp:.3g} N p-p")
+                    counts["corner"] += 1
         for label, omega, values in (linear or {}).get(r.name, []):
             ax.loglog(np.asarray(omega) * HZ_PER_RAD_S, np.abs(values), "--", lw=1.0,
                       label=label)
-        if r.claimed_peak is not None and math.isfinite(r.claimed_peak):
-            ax.axhline(r.claimed_peak, color="k", lw=0.8)
-            ax.axhspan(r.claimed_peak, r.claimed_peak * 1.3, color="tab:green", alpha=0.08)
+        if r.harmonic:
+            ax.plot([h.resonance_hz for h in r.harmonic], [h.peak for h in r.harmonic], "o",
+                    color="k", mfc="none", ms=5,
+                    label=f"harmonic balance, after ({len(r.harmonic)} levels)")
+        corner_points = [h for c in r.corners for h in c.harmonic]
+        if corner_points:
+            ax.plot([h.resonance_hz for h in corner_points], [h.peak for h in corner_points],
+                    "+", color="0.35", ms=5,
+                    label=f"harmonic balance at the spread's corners ({len(corner_points)})")
+        claim = r.claimed_peak
+        if claim is not None and math.isfinite(claim):
+            ax.axhline(claim, color="k", lw=0.8, label=f"claim {claim:.3g} m/N")
+            ax.axhspan(claim, claim * (1 + tolerance), color="tab:green", alpha=0.08)
+        evidence = r.evidence_against(tolerance)
+        for e in evidence:
+            ax.plot([e.resonance_hz], [e.peak], "X", color="tab:red", ms=9, mec="k", mew=0.6,
+                    label=_short(_evidence_label(e, claim), 120), zorder=5)
+        if evidence:
+            worst = evidence[0]
+            bottom, top = ax.get_ylim()
+            ax.set_ylim(bottom, max(top, 2.0 * worst.peak))   # room for the label
+            ax.annotate(f"{worst.method}, {worst.force_pp:.4g} N p-p"
+                        + ("" if worst.friction == "nominal" else f"\n{worst.friction}"),
+                        (worst.resonance_hz, worst.peak), textcoords="offset points",
+                        xytext=(8, 8), fontsize=7, color="tab:red",
+                        bbox=dict(boxstyle="round", fc="white", ec="tab:red", alpha=0.85))
         ax.axvline(r.band_hz[0], color="k", ls=":", lw=0.8)
         ax.axvline(r.band_hz[1], color="k", ls=":", lw=0.8)
-        verdict = "holds" if r.holds else "does NOT hold"
-        ax.set_title(f"{r.name}: the claim (black line; green: tolerance) {verdict}",
-                     fontsize=9)
+        if r.holds:
+            verdict = f"holds: every peak within the claim + {tolerance:.0%}"
+        elif evidence:
+            verdict = "does NOT hold: " + _evidence_label(evidence[0], claim)
+        else:
+            verdict = "does NOT hold: " + r.reason
+        ax.set_title(_short(f"{r.name}: {verdict}", 120), fontsize=9,
+                     color="k" if r.holds else "tab:red")
         ax.set_ylabel("|x/F| [m/N]")
         ax.grid(True, which="both", alpha=0.4)
-        ax.legend(fontsize=7, ncol=2)
+        ax.legend(fontsize=6, ncol=2)
+        drawn = [f"{counts['after']} simulated sweep(s) of the tuned design (nominal friction)",
+                 f"{counts['corner']} at corners of the friction spread" if counts["corner"]
+                 else "", f"{counts['before']} of the design before" if counts["before"]
+                 else "", f"{len(r.harmonic)} periodic responses by harmonic balance"
+                 if r.harmonic else "", f"{len(corner_points)} at the spread's corners"
+                 if corner_points else ""]
+        sentence = (f"{r.name}: " + ", ".join(x for x in drawn if x) + "; line styles: "
+                    + ("; ".join(style_key(ax)) or "none") + ". ")
+        if r.holds:
+            sentence += f"The claim holds (within {tolerance:.0%})."
+        else:
+            sentence += (f"The claim does NOT hold: {r.reason}."
+                         + (" Red crosses: " + "; ".join(_evidence_label(e, claim)
+                                                          for e in evidence) + "."
+                            if evidence else " No drawn point carries the failure."))
+        text.append(sentence)
     axes[-1].set_xlabel("excitation frequency [Hz] (dotted: the swept band)")
     if title:
         fig.suptitle(title, fontsize=10)
+    set_caption(fig, f"The tuned design's claim per regime (black line; green: the tolerance "
+                     f"of {tolerance:.0%} above it) against the nonlinear axis with LuGre "
+                     "friction at every pad. " + " ".join(text))
     return fig

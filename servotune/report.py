@@ -16,6 +16,8 @@ __all__ = [
     "OutputExistsError",
     "check_writable",
     "default_folder",
+    "figure_metadata",
+    "png_caption",
     "render_figures",
     "save_figure",
     "write_atomically",
@@ -130,7 +132,8 @@ def save_figure(fig, path, force: bool = False, dpi: int = 150) -> Path:
 
     path = Path(path)
     buffer = io.BytesIO()
-    fig.savefig(buffer, format=path.suffix.lstrip(".") or "png", dpi=dpi)
+    fmt = path.suffix.lstrip(".") or "png"
+    fig.savefig(buffer, format=fmt, dpi=dpi, metadata=figure_metadata(fig, fmt))
     return write_atomically(path, buffer.getvalue(), force)
 
 
@@ -166,7 +169,7 @@ def render_figures(figures, fmt: str = "png", dpi: int = 150, workers: int = 1) 
 
     def render(fig) -> bytes:
         buffer = io.BytesIO()
-        fig.savefig(buffer, format=fmt, dpi=dpi)
+        fig.savefig(buffer, format=fmt, dpi=dpi, metadata=figure_metadata(fig, fmt))
         return buffer.getvalue()
 
     n = min(int(workers), len(figures))
@@ -269,8 +272,23 @@ def default_folder(name: str) -> Path:
     return Path("out") / name
 
 
+def _regime_names(job) -> tuple[str | None, str | None]:
+    """The regime models the loops (the reference model) and the lobes (the worst model) of
+    the tuned design are of."""
+    after = job.result.after
+    if after is None:
+        return None, None
+    ref = after.models[after.reference].model.name if after.models else None
+    worst = after.worst_model
+    return ref, None if worst is None else worst.model.name
+
+
 def tuning_figures(job) -> list[tuple[str, str, object]]:
     """Return the figures of a tuning job as (file name, title, matplotlib figure).
+
+    Each figure carries its caption (:func:`servotune.plots.figure_caption`), made by the
+    function that drew it from what it drew; :func:`render_figures` and :func:`save_figure`
+    store it in the PNG (``Description``), and the report shows it under the figure.
 
     Parameters
     ----------
@@ -285,24 +303,35 @@ def tuning_figures(job) -> list[tuple[str, str, object]]:
     from . import plots
 
     name = job.axis.name
+    r = job.result
+    reference, worst = _regime_names(job)
     out = []
     if job.compliance_after or job.compliance_before:
-        out.append(("compliance.png", "Work-piece compliance per regime, before and after",
-                    plots.plot_regime_compliance(
-                        job.compliance_before, job.compliance_after,
-                        band=job.result.problem.requirements.band,
-                        title=f"{name}: work-piece X compliance per regime model, closed loop "
-                              "(before dashed, after solid)")))
+        not_drawn = []
+        if r.after is not None:
+            for mp0, mp1 in zip(r.before.models, r.after.models, strict=True):
+                if not mp1.model.cutting or mp1.model.sample != "nominal":
+                    continue
+                not_drawn += [f"{tag}, {mp.model.name} (unstable)"
+                              for tag, mp in (("before", mp0), ("after", mp1)) if not mp.stable]
+        fig = plots.plot_regime_compliance(job.compliance_before, job.compliance_after,
+                                           band=r.problem.requirements.band,
+                                           not_drawn=not_drawn)
+        _prefix_title(fig, name)
+        out.append(("compliance.png", "Work-piece compliance per regime model", fig))
     if job.verdict is not None and job.verdict.regimes:
         linear = {}
         for c in list(job.compliance_before) + list(job.compliance_after):
             regime = c.label.split(", ", 1)[-1].split(":")[0]
             linear.setdefault(regime, []).append((f"linear {c.label}", c.omega, c.values))
-        out.append(("nonlinear.png", "Nonlinear verification: simulated sweeps over the claims",
+        failing = [v.name for v in job.verdict.regimes if not v.holds]
+        out.append(("nonlinear.png", "Nonlinear verification: the claim per regime against "
+                    "the nonlinear axis" + (f" (does NOT hold: {', '.join(failing)})"
+                                             if failing else ""),
                     plots.plot_regime_verification(
-                        job.verdict.regimes, linear,
-                        title=f"{name}: LuGre time simulation (sweep envelopes) against the "
-                              "linear models")))
+                        job.verdict.regimes, linear, tolerance=job.verdict.tolerance,
+                        title=f"{name}: LuGre time simulation (sweep envelopes) and harmonic "
+                              "balance against the linear claims")))
     loops, analyses, styles = {}, {}, {}
     for tag, ls, report in (("before", "--", job.loops_before), ("after", "-", job.loops_after)):
         if report is None:
@@ -313,26 +342,87 @@ def tuning_figures(job) -> list[tuple[str, str, object]]:
             analyses[key] = getattr(report, loop)
             styles[key] = (colour, ls)
     if loops:
-        shown = " and ".join(t for t, r in (("before (dashed)", job.loops_before),
-                                            ("after (solid)", job.loops_after)) if r is not None)
-        out.append(("bode.png", "Loops before and after (Bode, margins)", plots.plot_bode(
-            loops, analyses, title=f"{name}: loops {shown}", styles=styles)))
+        shown = " and ".join(t for t, x in (("before (dashed)", job.loops_before),
+                                            ("after (solid)", job.loops_after)) if x is not None)
+        out.append(("bode.png", "Velocity and position loops (Bode, margins)"
+                    + (f" in {reference}" if reference else ""), plots.plot_bode(
+                        loops, analyses, title=f"{name}: loops {shown}", styles=styles,
+                        regime=None if reference is None else f"regime model {reference}")))
     lobes = [x for x in (job.lobes_before, job.lobes_after) if x is not None]
     if lobes:
         labels = [lab for lab, x in (("before", job.lobes_before), ("after", job.lobes_after))
                   if x is not None]
         depth = job.axis.requirements.depth_required
-        out.append(("lobes.png", "Stability lobes before and after", plots.plot_stability_lobes(
+        fig = plots.plot_stability_lobes(
             lobes, required_depth=depth, labels=labels, depth_max=4 * lobes[-1].b_crit,
-            title=f"{name}: stability lobes, worst regime model (zero-order)")))
+            title=f"{name}: stability lobes (zero-order) of the worst regime model"
+                  + (f" after: {worst}" if worst else ""))
+        if worst:
+            plots.set_caption(fig, plots.figure_caption(fig) + f" The worst regime model "
+                              f"(largest compliance peak) of the tuned design: {worst}; "
+                              "before, that of the design before.")
+        out.append(("lobes.png", "Stability lobes before and after", fig))
     if job.mode_peaks is not None:
-        out.append(("modes.png", "Several modes, one C (paper sec 5.2)", job.mode_peaks.plot()))
+        bounds = getattr(r.problem, "bounds", {}).get("c")
+        out.append(("modes.png", "Several modes, one C (paper sec 5.2)",
+                    plots.plot_mode_peaks(job.mode_peaks, bounds=bounds, axis_name=name)))
     if job.two_mass is not None:
         from .twomass import analyse_two_mass
 
         out.append(("two_mass.png", "Two-mass check: the paper's Fig 5 with the fixed points",
                     plots.plot_two_mass_compliance(analyse_two_mass(job.two_mass.system))))
     return out
+
+
+def _prefix_title(fig, name: str) -> None:
+    """Put the axis' name in front of the title of a one-axes figure."""
+    ax = fig.axes[0]
+    ax.set_title(f"{name}: {ax.get_title()}", fontsize=10)
+
+
+def figure_metadata(fig, fmt: str = "png") -> dict | None:
+    """Return the metadata a figure file carries: its caption, in a PNG as ``Description``.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    fmt : str, optional
+        The file format (default ``"png"``).
+
+    Returns
+    -------
+    dict or None
+        ``{"Description": caption}`` for a PNG with a caption, else None.
+    """
+    from .plots import figure_caption
+
+    text = figure_caption(fig)
+    return {"Description": text} if text and fmt == "png" else None
+
+
+def png_caption(data: bytes) -> str:
+    """Return the caption stored in a PNG (its ``Description`` text; "" without one).
+
+    Parameters
+    ----------
+    data : bytes
+        The PNG file.
+
+    Returns
+    -------
+    str
+        The caption.
+    """
+    import io
+
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            return str(getattr(image, "text", {}).get("Description", ""))
+    except (OSError, ValueError):
+        return ""
 
 
 def write_tuning_files(job, folder, force: bool = False) -> list[Path]:
@@ -402,13 +492,17 @@ def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
     if figures is None:
         import io
 
-        figures = []
+        from .plots import figure_caption
+
+        drawn = []
         for _, title, fig in tuning_figures(job):
             buffer = io.BytesIO()
-            fig.savefig(buffer, format="png", dpi=110)
-            figures.append((buffer.getvalue(), title))
+            fig.savefig(buffer, format="png", dpi=110, metadata=figure_metadata(fig))
+            drawn.append((buffer.getvalue(), title, figure_caption(fig)))
+        figures = drawn
     else:
-        figures = [(Path(p).read_bytes(), title) for p, title in figures]
+        figures = [(data, title, png_caption(data))
+                   for data, title in ((Path(p).read_bytes(), t) for p, t in figures)]
     head, lines = summary.verdict_lines(job)
     status = (f"<p class='{'ok' if job.verified else 'bad'}'>{html.escape(head)}</p>"
               + ("<ul>" + "".join(f"<li>{html.escape(x)}</li>" for x in lines) + "</ul>"
@@ -432,9 +526,11 @@ def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
                f"<td>{t.peak_tuned:.6e}</td><td>{t.peak_relative_difference:+.1e}</td></tr>"
                "</table>")
     figs = "".join(
-        f"<h3>{html.escape(title)}</h3><img alt='{html.escape(title)}' "
+        f"<figure id='figure-{k}'><h3>Figure {k}: {html.escape(title)}</h3>"
+        f"<img alt='{html.escape(title)}' "
         f"src='data:image/png;base64,{base64.b64encode(png).decode('ascii')}'/>"
-        for png, title in figures)
+        f"<figcaption><b>Figure {k}.</b> {html.escape(caption or title)}</figcaption></figure>"
+        for k, (png, title, caption) in enumerate(figures, start=1))
     source = axis.path.name if base is None else _relative(axis.file, base)
     stamp = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
     return html_page(f"servotune: {axis.name}", f"""
@@ -460,7 +556,12 @@ body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222
 table { border-collapse: collapse; margin: 0.5em 0; }
 td, th { border: 1px solid #bbb; padding: 3px 9px; text-align: right; }
 td:first-child { text-align: left; }
-img { max-width: 100%; border: 1px solid #ddd; margin-bottom: 1em; }
+table { display: block; max-width: 100%; overflow-x: auto; }
+img { max-width: 100%; height: auto; border: 1px solid #ddd; }
+figure { margin: 1.5em 0; max-width: 100%; }
+figcaption { font-size: 90%; color: #333; line-height: 1.35; margin-top: 0.3em; }
+p, li, figcaption { overflow-wrap: anywhere; }
+code { overflow-wrap: anywhere; }
 .ok { color: #075; font-weight: bold; } .bad { color: #a00; font-weight: bold; }
 ul.notes { font-size: 90%; color: #444; }
 """

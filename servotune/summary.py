@@ -16,7 +16,7 @@ from .units import HZ_PER_RAD_S
 
 __all__ = ["Table", "inputs_table", "design_table", "regimes_table", "rounds_table",
            "baseline_table", "loops_table", "thrust_table", "realisation_table",
-           "verdict_lines", "text", "html_table"]
+           "verdict_lines", "text", "html_table", "realised_notes", "REALISED_NOTE"]
 
 
 
@@ -224,6 +224,7 @@ def regimes_table(job) -> Table:
                          "yes" if v.holds else "NO"))
         notes = tuple(f"{v.name}: {v.reason}" for v in verdict.regimes if not v.holds)
         notes += tuple(f"{v.name}: {v.explanation}" for v in verdict.regimes if v.explanation)
+        notes += realised_notes(verdict.regimes, verdict.tolerance)
     else:
         for entry in _linear_claims(job):
             rows.append((entry[0], _f(entry[1], "{:.3g}"), _f(entry[2], "{:.3g}"), "-", "-",
@@ -233,6 +234,50 @@ def regimes_table(job) -> Table:
     return Table("Regimes: worst compliance peak [m/N], linear claim and nonlinear axis",
                  ("regime", "claim before", "claim after", "nonlinear before",
                   "nonlinear after", "realised", "holds"), tuple(rows), notes)
+
+
+#: what the "realised" column of :func:`regimes_table` is
+REALISED_NOTE = ("realised: the nonlinear axis' worst peak before over after tuning, at the "
+                 "nominal friction (1.10x: 10 % lower after); it measures the improvement "
+                 "the nonlinear axis shows, not the claim: 'holds' compares the peak after "
+                 "(over the friction spread too) with the claim")
+
+
+def realised_notes(regimes, tolerance: float) -> tuple[str, ...]:
+    """Return the notes that explain the "realised" column, regime by regime where it could
+    be misread (an improvement beside a claim that does not hold).
+
+    Parameters
+    ----------
+    regimes : sequence of servotune.verdict.RegimeVerdict
+        The regimes of the verdict.
+    tolerance : float
+        The verdict's tolerance on the claim.
+
+    Returns
+    -------
+    tuple of str
+        :data:`REALISED_NOTE` (when a regime has a realised improvement) and, for each regime
+        that does not hold, what its realised value means there.
+    """
+    regimes = list(regimes)
+    if not any(v.realised_improvement is not None for v in regimes):
+        return ()
+    notes = [REALISED_NOTE]
+    for v in regimes:
+        imp = v.realised_improvement
+        if v.holds or imp is None:
+            continue
+        change = ("no change" if abs(imp - 1) < 0.005 else
+                  f"{1 - 1 / imp:.0%} lower" if imp > 1 else f"{1 / imp - 1:.0%} higher")
+        after = (v.nonlinear_peak_after_nominal if v.nonlinear_peak_after_nominal is not None
+                 else v.nonlinear_peak_after)
+        notes.append(f"{v.name}: realised {imp:.2f}x: the nominal friction's nonlinear peak is "
+                     f"{change} after tuning ({_f(v.nonlinear_peak_before, '{:.3g}')} -> "
+                     f"{_f(after, '{:.3g}')} m/N), yet the claim "
+                     f"{_f(v.claimed_peak, '{:.3g}')} m/N does not hold within "
+                     f"{tolerance:.0%} (see the reason above)")
+    return tuple(notes)
 
 
 def baseline_table(job) -> Table | None:

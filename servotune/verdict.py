@@ -59,7 +59,8 @@ from .simulate.scenario import constant_speed, planned_sweep, sweep_plan
 from .simulate.simulator import NonlinearAxis, simulate
 from .units import HZ_PER_RAD_S
 
-__all__ = ["Simulation", "CornerVerdict", "RegimeVerdict", "Verdict", "nonlinear_verdict",
+__all__ = ["Simulation", "CornerVerdict", "RegimeVerdict", "Verdict", "Evidence",
+           "nonlinear_verdict",
            "verdict_spread", "sweep_band",
            "predicted_resonances", "simulate_sweep", "DEFAULT_PROCESS_FORCE", "HarmonicPeak",
            "harmonic_scan", "harmonic_scans", "SCAN_LEVELS"]
@@ -301,6 +302,35 @@ class CornerVerdict:
 
 
 @dataclass(frozen=True)
+class Evidence:
+    """A point of the nonlinear axis that breaks a regime's claim (what a figure marks).
+
+    Parameters
+    ----------
+    method : str
+        ``"harmonic balance"`` (a steady periodic response) or ``"simulated sweep"``.
+    friction : str
+        ``"nominal"`` or the corner of the friction spread.
+    force_pp : float
+        Work-piece force, peak to peak [N].
+    resonance_hz : float
+        Where the response peaks [Hz].
+    peak : float
+        The peak compliance [m/N].
+    why : str
+        What is wrong there: ``"above the claim"``, ``"at the band edge"`` or ``"does not
+        decay"``.
+    """
+
+    method: str
+    friction: str
+    force_pp: float
+    resonance_hz: float
+    peak: float
+    why: str
+
+
+@dataclass(frozen=True)
 class RegimeVerdict:
     """The claim of one regime against the nonlinear axis, before and after.
 
@@ -336,6 +366,45 @@ class RegimeVerdict:
         """The corner whose periodic response peaks highest (None without a spread)."""
         scanned = [c for c in self.corners if c.harmonic]
         return max(scanned, key=lambda c: c.harmonic_peak.peak) if scanned else None
+
+    def evidence_against(self, tolerance: float) -> tuple[Evidence, ...]:
+        """Return the peaks of the nonlinear axis that break this regime's claim.
+
+        The same tests as the verdict's: a periodic response (harmonic balance) or a simulated
+        sweep of the tuned design above ``claimed_peak`` (1 + ``tolerance``), at the nominal
+        friction or at a corner of the spread, and a simulated sweep whose peak lies at an
+        edge of its band or whose oscillation does not decay. Reasons without a peak (an
+        unstable corner, stick-slip while feeding) have no point here; ``reason`` names them.
+
+        Parameters
+        ----------
+        tolerance : float
+            The verdict's tolerance on the claim (:attr:`Verdict.tolerance`).
+
+        Returns
+        -------
+        tuple of Evidence
+            Largest peak first; empty when the regime holds.
+        """
+        claim = self.claimed_peak
+        limit = (claim * (1 + tolerance) if claim is not None and math.isfinite(claim)
+                 else math.inf)
+        sources = [("nominal", self.harmonic,
+                    [s for s in self.simulations if s.design == "after"])]
+        sources += [(c.label, c.harmonic, c.simulations) for c in self.corners]
+        out = []
+        for friction, harmonic, sims in sources:
+            out += [Evidence("harmonic balance", friction, h.force_pp, h.resonance_hz, h.peak,
+                             "above the claim") for h in harmonic if h.peak > limit]
+            for s in sims:
+                if s.kind != "sweep" or s.peak is None or s.resonance_hz is None:
+                    continue
+                why = ("above the claim" if s.peak > limit else "at the band edge"
+                       if s.at_edge else "does not decay" if s.decays is False else None)
+                if why is not None:
+                    out.append(Evidence("simulated sweep", friction, s.force_pp,
+                                        s.resonance_hz, s.peak, why))
+        return tuple(sorted(out, key=lambda e: -e.peak))
 
     @property
     def realised_improvement(self) -> float | None:

@@ -145,3 +145,76 @@ def test_mode_peaks_figure_draws_each_track_on_log_axes():
     assert "mode at 600 Hz" in curves[1].get_label()
     assert (ax.get_xscale(), ax.get_yscale()) == ("log", "log")
     assert ax.get_xlabel() == "guide-way damping C [N s/m]" and ax.get_ylabel().endswith("[m/N]")
+
+
+def test_bode_phase_is_wrapped_into_the_range_where_the_margins_are_read():
+    # L = wc/s / (1 + s/p)^8: the phase falls from -90 to -810 deg; drawn it is wrapped into
+    # (-360, 0] (each point the unwrapped phase less whole turns; the line broken where it
+    # wraps), so that at the crossover it is PM - 180 deg and every phase crossover crosses
+    # -180 deg; the phase axis spans plots.BODE_PHASE_RANGE_DEG
+    wc, p = 2 * math.pi * 10.0, 2 * math.pi * 200.0
+    loop = control.tf([wc], [1.0, 0.0]) * control.tf([1.0], [1.0 / p, 1.0]) ** 8
+    omega = np.geomspace(1.0, 1e5, 2000)
+    values = np.asarray(loop(1j * omega)).reshape(-1)
+    analysis = analyse_loop(control.ss(loop))
+    fig = plots.plot_bode({"velocity": (omega, values)}, {"velocity": analysis}, title="t",
+                          regime="feeding 20 mm/s: sliding")
+    ax_mag, ax_ph = fig.axes
+    (phase,) = _curves(ax_ph)
+    y = np.asarray(phase.get_ydata())
+    unwrapped = np.degrees(np.unwrap(np.angle(values)))
+    assert unwrapped[-1] < -700   # what was unreadable
+    ok = np.isfinite(y)
+    assert (~ok).sum() == 2   # the two wraps, at -360 and -720 deg
+    assert np.all((y[ok] > -360.0) & (y[ok] <= 0.0))
+    turns = (y[ok] - unwrapped[ok]) / 360.0
+    assert_allclose(turns, np.round(turns), atol=1e-9)   # whole turns only
+    lo, hi = plots.BODE_PHASE_RANGE_DEG
+    assert (lo, hi) == (-360.0, 0.0)
+    assert ax_ph.get_ylim()[0] <= lo and ax_ph.get_ylim()[1] >= hi
+    assert ax_ph.get_ylim()[1] - ax_ph.get_ylim()[0] <= 400.0
+    at = np.interp(np.log(analysis.crossover), np.log(omega), y)
+    assert at == pytest.approx(analysis.phase_margin_deg - 180.0, abs=0.5)
+    # the phase margin is a bar from -180 deg to the phase at the crossover
+    f_c = analysis.crossover * HZ_PER_RAD_S
+    (bar,) = [ln for ln in ax_ph.get_lines() if len(ln.get_xdata()) == 2
+              and np.allclose(ln.get_xdata(), f_c)]
+    assert_allclose(bar.get_ydata(), [-180.0, at], atol=0.5)
+    # the gain margin is a bar at the phase crossover from |L| up to 0 dB
+    f_pc = analysis.phase_crossover * HZ_PER_RAD_S
+    (gm,) = [ln for ln in ax_mag.get_lines() if len(ln.get_xdata()) == 2
+             and np.allclose(ln.get_xdata(), f_pc)]
+    assert_allclose(gm.get_ydata(), [-analysis.gain_margin_db, 0.0], atol=0.05)
+    # Ms is marked where the sensitivity peaks; the regime is named in title and caption
+    (ms,) = [ln for ln in ax_mag.get_lines() if ln.get_marker() == "D"]
+    assert_allclose(ms.get_xdata(), [analysis.ms_frequency * HZ_PER_RAD_S])
+    assert "feeding 20 mm/s: sliding" in ax_mag.get_title()
+    caption = plots.figure_caption(fig)
+    assert "feeding 20 mm/s: sliding" in caption and "solid (1): velocity loop" in caption
+    assert f"PM {analysis.phase_margin_deg:.1f} deg" in caption and "dashed" not in caption
+
+
+def test_mode_peaks_at_a_bound_and_a_spike_are_said_so():
+    # one track falls all the way to the upper bound (no minimum inside): no "best C" there;
+    # another has one point raised 20 times (6 times its larger neighbour): drawn as a cross,
+    # not joined to the track
+    c = np.geomspace(1e3, 1e8, 11)
+    falling = 1e-7 * (1e3 / c) ** 0.1
+    bowl = 3e-8 * (c / 1e5 + 1e5 / c)
+    bowl[7] *= 20.0
+    omega = 2 * math.pi * np.vstack([np.full(11, 60.0), np.full(11, 150.0)])
+    tracks = ModePeaks(c_values=c, frequencies=omega, peaks=np.vstack([falling, bowl]),
+                       c_best=np.array([1e8, 1e5]), c_chosen=1e4)
+    fig = plots.plot_mode_peaks(tracks, bounds=(1e3, 1e8), axis_name="ax")
+    (ax,) = fig.axes
+    first, second = _curves(ax)
+    assert "upper bound C = 1e+08 N s/m" in first.get_label()
+    assert "best C" not in first.get_label() and "best C = 1e+05" in second.get_label()
+    (end,) = [ln for ln in ax.get_lines() if ln.get_marker() == ">"]
+    assert_allclose(end.get_xdata(), [1e8])
+    assert np.isnan(second.get_ydata()[7])
+    (cross,) = [ln for ln in ax.get_lines() if ln.get_marker() == "x"]
+    assert_allclose(cross.get_xdata(), [c[7]])
+    assert_allclose(cross.get_ydata(), [bowl[7]])
+    caption = plots.figure_caption(fig)
+    assert "upper bound C = 1e+08 N s/m" in caption and "Crosses (1)" in caption
