@@ -695,7 +695,8 @@ def plot_bode(loops, analyses=None, title: str = "Loop transfer functions",
         marked.append(f"{name} ({ls_name(ls)}): " + ", ".join(parts))
     ax_mag.axhline(0.0, color="k", lw=0.8)
     ax_mag.set_ylabel("|L| [dB]")
-    ax_mag.set_title(title if regime is None else f"{title}\n{regime}", fontsize=10)
+    ax_mag.set_title(title if regime is None else f"{title}\nregime model {regime}",
+                     fontsize=10)
     ax_mag.grid(True, which="both", alpha=0.4)
     ax_mag.legend(fontsize=7)
     ax_ph.axhline(-180.0, color="k", lw=0.8)
@@ -972,7 +973,7 @@ def plot_mode_peaks(mode_peaks, bounds=None, axis_name: str | None = None) -> Fi
             ax.plot(c[spike], row[spike], "x", color=line.get_color(), ms=7, mew=1.6,
                     label=f"{f:.0f} Hz mode: near-coincident poles ({int(spike.sum())} point"
                           f"{'s' if spike.sum() > 1 else ''})")
-        notes.append(f"the {f:.0f} Hz mode {where}")
+        notes.append(f"the {f:.0f} Hz mode: {where}")
         if same.any():
             notes.append(f"from C = {c[np.argmax(same)]:.2g} N s/m the {f:.0f} Hz track "
                          f"follows the same pole as the {merged_with:.0f} Hz one (the nearest "
@@ -1076,10 +1077,16 @@ def _short(text: str, n: int = 110) -> str:
 
 def _evidence_label(e, claim) -> str:
     where = "" if e.friction == "nominal" else f", {e.friction}"
-    why = (f"{e.peak / claim - 1:.0%} above the claim" if e.why == "above the claim" and claim
-           and math.isfinite(claim) else e.why)
+    over = e.peak / claim - 1 if claim and math.isfinite(claim) else None
+    why = (f"{over:.1%} above the claim" if e.why == "above the claim" and over is not None
+           and over < 0.095 else f"{over:.0%} above the claim" if e.why == "above the claim"
+           and over is not None else e.why)
     return (f"{e.method} at {e.force_pp:.4g} N p-p{where}: {e.peak:.3g} m/N at "
             f"{e.resonance_hz:.1f} Hz, {why}")
+
+
+#: how many points that break a claim the legend names one by one (the caption names all)
+EVIDENCE_IN_LEGEND = 3
 
 
 def plot_regime_verification(regimes, linear=None, title: str | None = None,
@@ -1153,9 +1160,12 @@ def plot_regime_verification(regimes, linear=None, title: str | None = None,
             ax.axhline(claim, color="k", lw=0.8, label=f"claim {claim:.3g} m/N")
             ax.axhspan(claim, claim * (1 + tolerance), color="tab:green", alpha=0.08)
         evidence = r.evidence_against(tolerance)
-        for e in evidence:
+        for k, e in enumerate(evidence):
+            label = (_short(_evidence_label(e, claim), 120) if k < EVIDENCE_IN_LEGEND else
+                     f"{len(evidence) - k} more point(s) that break the claim (in the caption)"
+                     if k == EVIDENCE_IN_LEGEND else "_more evidence")
             ax.plot([e.resonance_hz], [e.peak], "X", color="tab:red", ms=9, mec="k", mew=0.6,
-                    label=_short(_evidence_label(e, claim), 120), zorder=5)
+                    label=label, zorder=5)
         if evidence:
             worst = evidence[0]
             bottom, top = ax.get_ylim()

@@ -347,14 +347,15 @@ def tuning_figures(job) -> list[tuple[str, str, object]]:
         out.append(("bode.png", "Velocity and position loops (Bode, margins)"
                     + (f" in {reference}" if reference else ""), plots.plot_bode(
                         loops, analyses, title=f"{name}: loops {shown}", styles=styles,
-                        regime=None if reference is None else f"regime model {reference}")))
-    lobes = [x for x in (job.lobes_before, job.lobes_after) if x is not None]
+                        regime=reference)))
+    # the tuned design first: drawn solid with its unstable region shaded, as elsewhere
+    lobes = [x for x in (job.lobes_after, job.lobes_before) if x is not None]
     if lobes:
-        labels = [lab for lab, x in (("before", job.lobes_before), ("after", job.lobes_after))
+        labels = [lab for lab, x in (("after", job.lobes_after), ("before", job.lobes_before))
                   if x is not None]
         depth = job.axis.requirements.depth_required
         fig = plots.plot_stability_lobes(
-            lobes, required_depth=depth, labels=labels, depth_max=4 * lobes[-1].b_crit,
+            lobes, required_depth=depth, labels=labels, depth_max=4 * lobes[0].b_crit,
             title=f"{name}: stability lobes (zero-order) of the worst regime model"
                   + (f" after: {worst}" if worst else ""))
         if worst:
@@ -557,7 +558,7 @@ table { border-collapse: collapse; margin: 0.5em 0; }
 td, th { border: 1px solid #bbb; padding: 3px 9px; text-align: right; }
 td:first-child { text-align: left; }
 table { display: block; max-width: 100%; overflow-x: auto; }
-img { max-width: 100%; height: auto; border: 1px solid #ddd; }
+img { max-width: 100%; height: auto; border: 1px solid #ddd; box-sizing: border-box; }
 figure { margin: 1.5em 0; max-width: 100%; }
 figcaption { font-size: 90%; color: #333; line-height: 1.35; margin-top: 0.3em; }
 p, li, figcaption { overflow-wrap: anywhere; }

@@ -238,7 +238,7 @@ def regimes_table(job) -> Table:
 
 #: what the "realised" column of :func:`regimes_table` is
 REALISED_NOTE = ("realised: the nonlinear axis' worst peak before over after tuning, at the "
-                 "nominal friction (1.10x: 10 % lower after); it measures the improvement "
+                 "nominal friction (1.10x: 10% lower after); it measures the improvement "
                  "the nonlinear axis shows, not the claim: 'holds' compares the peak after "
                  "(over the friction spread too) with the claim")
 
