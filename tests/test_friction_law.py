@@ -10,7 +10,6 @@ from axis_fixtures import PADS, small_axis, small_drive
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
-import servotune.friction.laws as laws_package
 from servotune.friction import LuGreParameters
 from servotune.friction.guideway import GuideWayFriction
 from servotune.friction.law import FrictionLaw, friction_law, friction_law_names
@@ -25,6 +24,7 @@ from dataclasses import dataclass
 
 import control
 import numba
+import numpy as np
 
 from servotune.friction.law import FrictionLaw
 from servotune.structure.model import signal_name
@@ -72,17 +72,33 @@ class ToyMaxwell(FrictionLaw):
 
     def newton_tolerance(self, step):
         return 1e-14
+
+    def friction_force(self, v, z):
+        return self.k * np.asarray(z)
+
+    def periodic_force(self, velocity, period, share=1.0):
+        # dz/dt = v - CONSTANT z, F = k z: the periodic response harmonic by harmonic
+        v = np.fft.rfft(np.asarray(velocity, dtype=float))
+        omega = 2 * np.pi * np.arange(v.size) / period
+        return share * self.k * np.fft.irfft(v / (1j * omega + CONSTANT), n=len(velocity))
 '''
 
 
 @pytest.fixture
 def toy_law(tmp_path, monkeypatch):
-    """A law module added to the laws package (a folder of its own on the package's path)."""
-    folder = tmp_path / "laws"
-    folder.mkdir()
-    monkeypatch.setattr(laws_package, "__path__", [*laws_package.__path__, str(folder)])
+    """A law in a package of its own, installed for the test: the module and a dist-info with
+    its entry point in a folder on sys.path (as pip would install it)."""
+    from servotune.friction import law as law_module
+
+    folder = tmp_path / "site"
+    info = folder / "toy_maxwell-0.1.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: toy-maxwell\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[servotune.friction_laws]\n"
+                                           "toymaxwell = toymaxwell:ToyMaxwell\n")
+    monkeypatch.syspath_prepend(str(folder))
     monkeypatch.setenv("SERVOTUNE_KERNEL_DIR", str(tmp_path / "kernels"))
-    module = f"{laws_package.__name__}.toymaxwell"
+    module = "toymaxwell"
 
     def write(constant):
         (folder / "toymaxwell.py").write_text(TOY.replace("CONSTANT", repr(constant)))
@@ -94,8 +110,8 @@ def toy_law(tmp_path, monkeypatch):
     write(50.0)
     yield write
     sys.modules.pop(module, None)
-    from servotune.friction import law as law_module
     law_module._REGISTRY.pop("toymaxwell", None)
+    law_module._LOADED.pop("toymaxwell", None)
 
 
 def test_the_bundled_laws_are_discovered():
@@ -110,8 +126,9 @@ def test_two_laws_of_one_name_are_refused():
         type("Impostor", (FrictionLaw,), {"name": "lugre"})
 
 
-def test_a_new_module_is_a_new_law_for_the_contacts_and_the_axis_file(toy_law, tmp_path):
-    # nothing but the module: the registry, the contacts and the loader find it
+def test_a_new_package_is_a_new_law_for_the_contacts_and_the_axis_file(toy_law, tmp_path):
+    # nothing but the module and its entry point: the registry, the contacts and the loader
+    # find it
     toy = friction_law("toymaxwell")
     law = toy.from_table({"k": 2.0e8})
     friction = GuideWayFriction(PADS, law=law, viscous=10.0)

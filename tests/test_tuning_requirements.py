@@ -89,6 +89,7 @@ def test_a_requirement_added_as_one_class_is_imposed_checked_and_reported():
 
 
 def test_two_requirements_of_one_name_are_refused():
+    requirements()          # the shipped ones loaded from their entry points
     with pytest.raises(TypeError, match="registered already"):
         class Again(Requirement):
             name = "kv_min"

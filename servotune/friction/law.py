@@ -1,12 +1,16 @@
 """The interface of a guide-way friction law, and the registry the laws join by subclassing it.
 
-A friction law is one class on :class:`FrictionLaw` in a module of the package
-:mod:`servotune.friction.laws`. Defining the class registers it under its :attr:`~FrictionLaw.name`
-(``__init_subclass__``); the package imports every module it holds (``pkgutil``), so a new law
-is one new module and nothing else: the axis description (``[friction.<name>]``), the linear
+A friction law is one class on :class:`FrictionLaw`, declared as an entry point of the group
+``servotune.friction_laws`` (:mod:`servotune.plugins`) named after its :attr:`~FrictionLaw.name`:
+servotune's own laws (:mod:`servotune.friction.laws`) in servotune's ``pyproject.toml``, a law of
+another package in that package's. The axis description (``[friction.<name>]``), the linear
 contacts of the plant (:mod:`servotune.plant`), the command line and the time simulation
 (:mod:`servotune.simulate`, whose compiled kernel is built for the law's remainder) find it
-through :func:`friction_law` and :func:`friction_law_names`.
+through :func:`friction_law` and :func:`friction_law_names`. The names come from the installed
+metadata; a law's module is imported when the law is first asked for, and the class is checked
+then (:data:`REQUIRED_METHODS`, :data:`REQUIRED_NONLINEAR_METHODS`). A class defined in the
+running program (a script, a test) registers itself by being defined (``__init_subclass__``)
+and is found by name too.
 
 What a law gives (values are axis totals, shared equally by the guide-way pads):
 
@@ -38,16 +42,34 @@ import math
 import control
 import numpy as np
 
-from ..plugins import import_modules
+from ..plugins import (
+    FRICTION_LAWS_GROUP,
+    Plugin,
+    PluginError,
+    discover,
+    load_plugin,
+    missing_methods,
+)
 from ..structure.model import signal_name
 
 __all__ = ["FrictionLaw", "friction_law", "friction_law_names", "friction_laws",
-           "LAWS_PACKAGE"]
+           "LAWS_PACKAGE", "REQUIRED_METHODS", "REQUIRED_NONLINEAR_METHODS"]
 
-#: The package whose modules are imported to discover the friction laws.
+#: servotune's package of laws, whose modules are imported only in an uninstalled source tree
+#: (:func:`servotune.plugins.discover`).
 LAWS_PACKAGE = "servotune.friction.laws"
 
+#: What every law implements: the axis file, the linear contact at rest, the time simulation's
+#: linear block, the force.
+REQUIRED_METHODS = ("from_table", "presliding", "pad_block", "friction_force")
+#: What a nonlinear law (``nonlinear = True``) implements besides: the time simulation's
+#: remainder and harmonic balance.
+REQUIRED_NONLINEAR_METHODS = ("remainder", "remainder_parameters", "remainder_states",
+                              "error_scales", "newton_tolerance", "periodic_force")
+
 _REGISTRY: dict[str, type] = {}
+#: Laws loaded from their entry points (and checked), by name: how each is declared.
+_LOADED: dict[str, Plugin] = {}
 
 
 class FrictionLaw:
@@ -55,10 +77,11 @@ class FrictionLaw:
 
     A subclass sets the class attribute :attr:`name` (lower case, the key of
     ``[friction.<name>]`` in an axis description) and implements at least
-    :meth:`pad_block`, :meth:`presliding`, :meth:`friction_force` and, for a nonlinear law
-    (``nonlinear = True``), :meth:`remainder`, :meth:`remainder_parameters`,
-    :meth:`remainder_states`, :meth:`spring_states`, :meth:`error_scales`,
-    :meth:`newton_tolerance` and :meth:`periodic_force`. A class with ``name = None`` (an
+    :meth:`from_table`, :meth:`presliding`, :meth:`pad_block`, :meth:`friction_force` and, for a
+    nonlinear law (``nonlinear = True``), :meth:`remainder`, :meth:`remainder_parameters`,
+    :meth:`remainder_states`, :meth:`error_scales`, :meth:`newton_tolerance` and
+    :meth:`periodic_force` (and :meth:`spring_states` when it has elastic states); a law loaded
+    from its entry point that lacks one is refused. A class with ``name = None`` (an
     intermediate base) is not registered.
 
     Signals of :meth:`pad_block`: inputs the pad velocity ``v_<pad>``, the remainders
@@ -94,8 +117,10 @@ class FrictionLaw:
         known = _REGISTRY.get(name)
         if known is not None and (known.__module__, known.__qualname__) != (
                 cls.__module__, cls.__qualname__):
+            origin = _LOADED.get(name)
+            declared = "" if origin is None else f" (the {origin.describe()})"
             raise TypeError(f"two friction laws are named {name!r}: "
-                            f"{known.__module__}.{known.__qualname__} and "
+                            f"{known.__module__}.{known.__qualname__}{declared} and "
                             f"{cls.__module__}.{cls.__qualname__}; rename one")
         _REGISTRY[name] = cls
 
@@ -370,38 +395,95 @@ class FrictionLaw:
         raise NotImplementedError(f"the {self.name!r} friction law has no periodic force")
 
 
-def _discover() -> None:
-    """Import the laws package and any module of it not imported yet (a module added to the
-    package's folders since is found too)."""
-    import_modules(LAWS_PACKAGE)
+def _plugins() -> dict:
+    """The laws' entry points by name (servotune's package imported in an uninstalled tree)."""
+    return discover(FRICTION_LAWS_GROUP, LAWS_PACKAGE)
+
+
+def _check_law(name: str):
+    """The check of a law loaded from the entry point ``name``: what it lacks."""
+
+    def check(cls) -> list[str]:
+        if not (isinstance(cls, type) and issubclass(cls, FrictionLaw)):
+            return [f"it loads {cls!r}, not a class on servotune.friction.law.FrictionLaw"]
+        problems = []
+        if cls.__dict__.get("name") != name:
+            problems.append(f"its class {cls.__module__}.{cls.__qualname__} is named "
+                            f"{cls.__dict__.get('name')!r}, not {name!r} (the entry point's "
+                            "name is the law's name)")
+        required = REQUIRED_METHODS + (REQUIRED_NONLINEAR_METHODS if cls.nonlinear else ())
+        missing = missing_methods(cls, FrictionLaw, required)
+        if missing:
+            kind = "a nonlinear law" if cls.nonlinear else "every law"
+            problems.append(f"{cls.__qualname__} does not implement {', '.join(missing)} "
+                            f"(required of {kind}: {', '.join(required)})")
+        return problems
+
+    return check
+
+
+def _load(name: str, plugins: dict) -> None:
+    """Load and check the law of entry point ``name`` unless done already."""
+    plugin = plugins[name]
+    if _LOADED.get(name) == plugin and name in _REGISTRY:
+        return
+    try:
+        cls = load_plugin(plugin, _check_law(name))
+    except PluginError:
+        # a refused class registered itself when defined: it must not be found by name
+        for key in [k for k, v in _REGISTRY.items() if v.__module__ == plugin.value.split(":")[0]]:
+            _REGISTRY.pop(key)
+        raise
+    _REGISTRY[name] = cls   # registered when defined, unless the registry was emptied since
+    _LOADED[name] = plugin
 
 
 def friction_laws() -> dict[str, type]:
-    """Return all registered friction laws, by name (the laws package imported first).
+    """Return all friction laws, by name, each loaded from its entry point and checked.
 
     Returns
     -------
     dict of str to type
         Name -> class on :class:`FrictionLaw`.
 
+    Raises
+    ------
+    servotune.plugins.PluginError
+        A law that cannot be loaded or is refused (the message names every one, with its
+        entry point and distribution), or two laws of one name.
+
     Examples
     --------
     >>> {"lugre", "viscous"} <= set(friction_laws())
     True
     """
-    _discover()
+    plugins = _plugins()
+    errors = []
+    for name in plugins:
+        try:
+            _load(name, plugins)
+        except PluginError as exc:
+            errors.append(str(exc))
+    if errors:
+        raise PluginError("\n".join(errors))
     return dict(_REGISTRY)
 
 
 def friction_law_names() -> tuple[str, ...]:
-    """Return the names of the registered friction laws, sorted.
+    """Return the names of the friction laws, sorted (none is imported to list them).
 
     Returns
     -------
     tuple of str
-        The names (keys of ``[friction.<name>]``).
+        The names (keys of ``[friction.<name>]``): the entry points of the group
+        ``servotune.friction_laws`` and the laws defined in the running program.
+
+    Raises
+    ------
+    servotune.plugins.PluginError
+        Two laws of one name (the message names both entry points and their distributions).
     """
-    return tuple(sorted(friction_laws()))
+    return tuple(sorted(set(_plugins()) | set(_REGISTRY)))
 
 
 def friction_law(name: str) -> type:
@@ -415,12 +497,16 @@ def friction_law(name: str) -> type:
     Returns
     -------
     type
-        The class on :class:`FrictionLaw`.
+        The class on :class:`FrictionLaw` (loaded from its entry point and checked on first
+        use).
 
     Raises
     ------
     ValueError
         For an unknown name (the message lists the known ones).
+    servotune.plugins.PluginError
+        The law's plug-in cannot be loaded or is refused, or two plug-ins share the name
+        (the message names the entry point, its distribution and what is wrong).
 
     See Also
     --------
@@ -431,9 +517,14 @@ def friction_law(name: str) -> type:
     >>> friction_law("lugre").__name__
     'LuGreFriction'
     """
-    laws = friction_laws()
+    key = str(name).lower()
+    plugins = _plugins()
+    if key in plugins:
+        _load(key, plugins)
     try:
-        return laws[str(name).lower()]
+        return _REGISTRY[key]
     except KeyError:
-        raise ValueError(f"unknown friction law {name!r}; the registered laws are "
-                         f"{sorted(laws)} (a law is a module in {LAWS_PACKAGE})") from None
+        raise ValueError(f"unknown friction law {name!r}; the known laws are "
+                         f"{sorted(set(plugins) | set(_REGISTRY))} (a law of another package "
+                         f"is found once that package is installed with an entry point in "
+                         f"the group {FRICTION_LAWS_GROUP!r})") from None

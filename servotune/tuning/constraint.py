@@ -1,11 +1,13 @@
 """A requirement as the tuner sees it, and the registry the requirements join by subclassing.
 
-A requirement is one class on :class:`Requirement` in a module of the package
-:mod:`servotune.tuning.requirements`. Defining the class registers it (``__init_subclass__``);
-the package imports every module it holds, so a new requirement is one new module: the NLP
-(:mod:`servotune.tuning.nlp`), the dense check
+A requirement is one class on :class:`Requirement`, declared as an entry point of the group
+``servotune.requirements`` (:mod:`servotune.plugins`): servotune's own
+(:mod:`servotune.tuning.requirements`) in servotune's ``pyproject.toml``, one of another package
+in that package's. The NLP (:mod:`servotune.tuning.nlp`), the dense check
 (:func:`servotune.tuning.verify.requirement_checks`), the grid exchange and the reports (which
-show each :class:`RequirementCheck`'s text) find it through :func:`requirements`.
+show each :class:`RequirementCheck`'s text) find it through :func:`requirements`, which loads
+every declared requirement and checks it (:func:`requirement_problems`). A class defined in the
+running program registers itself by being defined (``__init_subclass__``).
 
 A requirement gives:
 
@@ -28,15 +30,27 @@ from __future__ import annotations
 import inspect
 from dataclasses import dataclass
 
-from ..plugins import import_modules
+from ..plugins import (
+    REQUIREMENTS_GROUP,
+    Plugin,
+    PluginError,
+    discover,
+    load_plugin,
+    missing_methods,
+)
 
 __all__ = ["Requirement", "RequirementCheck", "LoopQuantities", "requirements",
-           "REQUIREMENTS_PACKAGE", "CHECK_TOLERANCE"]
+           "requirement_problems", "REQUIREMENTS_PACKAGE", "CHECK_TOLERANCE"]
 
-#: The package whose modules are imported to discover the requirements.
+#: servotune's package of requirements, whose modules are imported only in an uninstalled
+#: source tree (:func:`servotune.plugins.discover`).
 REQUIREMENTS_PACKAGE = "servotune.tuning.requirements"
 
 _REGISTRY: dict[str, type] = {}
+#: Requirements loaded from their entry points (and checked), by entry-point name.
+_LOADED: dict[str, Plugin] = {}
+#: How each loaded requirement is declared, by the requirement's name (for clash messages).
+_ORIGIN: dict[str, Plugin] = {}
 
 #: Relative slack of the dense check on a requirement the optimiser imposed exactly (the grid
 #: exchange converges to this order; the gates of the hierarchy constraints are soft by a few
@@ -133,8 +147,10 @@ class Requirement:
         other = _REGISTRY.get(cls.name)
         if other is not None and (other.__module__, other.__qualname__) != (
                 cls.__module__, cls.__qualname__):
+            origin = _ORIGIN.get(cls.name)
+            declared = "" if origin is None else f", the {origin.describe()}"
             raise TypeError(f"a requirement named {cls.name!r} is registered already "
-                            f"({other.__module__}.{other.__qualname__})")
+                            f"({other.__module__}.{other.__qualname__}{declared})")
         _REGISTRY[cls.name] = cls
 
     @classmethod
@@ -289,6 +305,82 @@ def _complete_docstrings(cls) -> None:
         func.__doc__ = own + "\n\n" + base_doc.split("\n\n", 1)[1]
 
 
+def requirement_problems(plugin_class) -> list[str]:
+    """Return what a requirement plug-in lacks (empty: usable).
+
+    A requirement is a class on :class:`Requirement` with a ``name``; it imposes something
+    (loop rows: :meth:`~Requirement.row_names` and :meth:`~Requirement.loop_rows`, with
+    :meth:`~Requirement.gate` when ``gate_size`` > 0; and/or :meth:`~Requirement.design_rows`)
+    and checks it (:meth:`~Requirement.model_checks` and/or :meth:`~Requirement.design_checks`):
+    a requirement imposed but never checked would pass unverified.
+
+    Parameters
+    ----------
+    plugin_class : object
+        What the entry point loads.
+
+    Returns
+    -------
+    list of str
+        One sentence per thing missing.
+    """
+    cls = plugin_class
+    if not (isinstance(cls, type) and issubclass(cls, Requirement)):
+        return [f"it loads {cls!r}, not a class on servotune.tuning.constraint.Requirement"]
+    problems = []
+    if not (isinstance(cls.name, str) and cls.name):
+        problems.append(f"{cls.__qualname__} sets no name (the constraint group's name)")
+
+    def lacks(*names):
+        return missing_methods(cls, Requirement, names)
+
+    loop, design = not lacks("loop_rows"), not lacks("design_rows")
+    if not (loop or design):
+        problems.append(f"{cls.__qualname__} imposes nothing: it implements neither loop_rows "
+                        "(with row_names) nor design_rows")
+    if loop and lacks("row_names"):
+        problems.append(f"{cls.__qualname__} implements loop_rows but not row_names")
+    if loop and cls.gate_size and lacks("gate"):
+        problems.append(f"{cls.__qualname__} has gate_size = {cls.gate_size} but does not "
+                        "implement gate")
+    if len(lacks("model_checks", "design_checks")) == 2:
+        problems.append(f"{cls.__qualname__} checks nothing: it implements neither "
+                        "model_checks nor design_checks")
+    return problems
+
+
+def _load_all() -> None:
+    """Load and check every requirement declared as an entry point (each once)."""
+    errors = []
+    for name, plugin in discover(REQUIREMENTS_GROUP, REQUIREMENTS_PACKAGE).items():
+        if _LOADED.get(name) == plugin:
+            continue
+        try:
+            cls = load_plugin(plugin, requirement_problems)
+        except PluginError as exc:
+            module = plugin.value.split(":")[0]
+            for key in [k for k, v in _REGISTRY.items() if v.__module__ == module]:
+                _REGISTRY.pop(key)
+            errors.append(str(exc))
+            continue
+        other = _REGISTRY.get(cls.name)
+        if other is not None and (other.__module__, other.__qualname__) != (
+                cls.__module__, cls.__qualname__):
+            origin = _ORIGIN.get(cls.name)
+            declared = ("defined in the running program" if origin is None
+                        else f"the {origin.describe()}")
+            errors.append(f"two requirements are named {cls.name!r}: "
+                          f"{other.__module__}.{other.__qualname__} ({declared}) and "
+                          f"{cls.__module__}.{cls.__qualname__} (the {plugin.describe()}); "
+                          "uninstall one or rename one")
+            continue
+        _REGISTRY[cls.name] = cls   # registered when defined, unless emptied since
+        _LOADED[name] = plugin
+        _ORIGIN[cls.name] = plugin
+    if errors:
+        raise PluginError("\n".join(errors))
+
+
 def requirements(problem=None) -> tuple[type, ...]:
     """Return the registered requirements in their order (those the problem asks for).
 
@@ -300,9 +392,17 @@ def requirements(problem=None) -> tuple[type, ...]:
     Returns
     -------
     tuple of type
-        :class:`Requirement` subclasses, sorted by ``order``.
+        :class:`Requirement` subclasses, sorted by ``order``: every entry point of the group
+        ``servotune.requirements`` and those defined in the running program.
+
+    Raises
+    ------
+    servotune.plugins.PluginError
+        A declared requirement that cannot be loaded or is refused (all of them named, with
+        their entry points and distributions), or two of one name: a tuning without a
+        requirement the installation declares would silently be another problem.
     """
-    import_modules(REQUIREMENTS_PACKAGE)
+    _load_all()
     found = sorted(_REGISTRY.values(), key=lambda c: (c.order, c.name))
     if problem is None:
         return tuple(found)

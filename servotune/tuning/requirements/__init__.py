@@ -1,15 +1,12 @@
-"""The requirements of the tuning problem, one module each, imported (and registered) on import.
+"""servotune's own requirements of the tuning problem, one module each.
 
-Every module of this package is imported here (:func:`servotune.plugins.import_modules`), and
-defining a class on :class:`servotune.tuning.constraint.Requirement` registers it: adding a
-requirement is adding a module, no list to edit. See :mod:`servotune.tuning.constraint` for the
-interface.
+Each is declared as an entry point of the group ``servotune.requirements`` in servotune's
+``pyproject.toml`` and loaded by :func:`servotune.tuning.constraint.requirements`; a requirement
+of another package is declared the same way in that package. Only in a source tree that is not
+installed are the modules of this package imported to find them
+(:func:`servotune.plugins.discover`). See :mod:`servotune.tuning.constraint` for the interface.
 """
 
 from __future__ import annotations
 
-from ...plugins import import_modules
-
 __all__: list[str] = []
-
-import_modules(__name__)
