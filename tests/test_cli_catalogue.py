@@ -255,6 +255,18 @@ CASES = [
         "tune", axis(t, s, drop=["drive"]), "--no-simulation"], 1, "[drive]",
                  ),
 
+    # ---- measured FRFs (`identify`)
+    ("identify-csv-text-for-number", lambda t, s: ["identify", frf_csv(
+        t, "f_hz,re,im\n10,1e-6,0\n20,fast,0\n")], 1, "frf.csv, line 3: column 're'"),
+    ("identify-missing-file", lambda t, s: ["identify", str(t / "hammer.uff")], 1,
+     "hammer.uff: no such file"),
+    ("identify-uff-without-frf", lambda t, s: ["identify", text_file(
+        t, "nodes.unv", "    -1\n   164\n         1  SI\n    -1\n")], 1,
+     "no dataset 58"),
+    ("identify-band-reversed", lambda t, s: ["identify", frf_csv(
+        t, "f_hz,re,im\n10,1e-6,0\n20,1e-6,0\n"), "--band-hz", "300", "20"], 2,
+     "--band-hz 300 20"),
+
     # ---- structure files (`check`)
     ("check-missing-file", lambda t, s: ["check", str(t / "M.mtx"), str(t / "K.mtx")], 1,
      "M.mtx"),

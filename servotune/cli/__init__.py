@@ -22,8 +22,8 @@ import sys
 __all__ = ["main", "build_parser", "COMMANDS", "SUMMARIES"]
 
 # subcommand modules, in the order ``servotune --help`` lists them
-COMMANDS = ("init", "twomass", "modes", "check", "friction", "bode", "compliance", "nlcompliance",
-            "lobes", "tune", "table3", "verify", "study")
+COMMANDS = ("init", "twomass", "modes", "identify", "check", "friction", "bode", "compliance",
+            "nlcompliance", "lobes", "tune", "table3", "verify", "study")
 
 # one line per subcommand for ``servotune --help`` without importing every module (a command
 # missing here is imported to list it); tests/test_cli.py checks them against the modules
@@ -31,6 +31,7 @@ SUMMARIES = {
     "init": "write a commented starter axis description (axis.toml + structure.npz)",
     "twomass": "fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
     "modes": "natural frequencies and each mode's share of work-piece X motion",
+    "identify": "natural frequencies, damping ratios and residues from measured FRFs (LSCF/LSFD)",
     "check": "check mass/stiffness matrices (symmetry, definiteness, rigid-body mass, "
              "fixed-base frequencies, modal effective mass) and a reduction against the full "
              "model",

@@ -1,0 +1,146 @@
+"""``servotune identify``: natural frequencies, damping ratios and residues from measured FRFs.
+
+Reads impact-hammer FRFs (CSV or UFF dataset 58, :mod:`servotune.measured.frf`), estimates the
+poles by LSCF at every model order, chooses the physical ones by the stabilisation rule (or the
+poles nearest to ``--modes-hz``), fits the residues by LSFD and reports how well the modes
+reproduce the measurement (:mod:`servotune.measured.ema`). Figures: the measured against the
+synthesised FRFs, and the stabilisation diagram.
+
+Updating an axis description from the modes (``--axis``) is not done yet.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ._common import (
+    RunOutput,
+    UsageError,
+    add_common_options,
+    number,
+    print_json,
+    save_figure,
+    write_results,
+)
+
+__all__ = ["add_parser", "run"]
+
+FIGURES = ("frf_fit.png", "stabilisation.png")
+_FREQUENCY = number(0.0, 1e6, low_open=True, example=120, unit="Hz")
+_ORDER = number(5, 200, integer=True, example=40)
+QUANTITIES = ("receptance", "mobility", "accelerance")
+
+
+def add_parser(subparsers) -> None:
+    """Add the ``servotune identify`` sub-command and its options.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The sub-commands of the ``servotune`` parser.
+    """
+    p = subparsers.add_parser(
+        "identify",
+        help="natural frequencies, damping ratios and residues from measured FRFs (LSCF/LSFD)",
+        description="Modal identification of measured FRFs (impact-hammer receptances at the "
+                    "work piece): poles by LSCF at model orders 2..2N, residues by LSFD with "
+                    "lower and upper residual terms (sdypy-EMA). A pole is physical when it "
+                    "stands over at least 5 consecutive model orders within 1 %% in frequency "
+                    "and 5 %% in damping of the order below, with a damping ratio in (0, 0.3), "
+                    "outside the band's outer 3 %%; such poles within 1 %% are one mode. "
+                    "--modes-hz picks the poles nearest to given frequencies instead. Writes "
+                    "results.json, frf_fit.png (measured against synthesised) and "
+                    "stabilisation.png. Not yet: updating an axis description from the modes "
+                    "(--axis), and the drive's measured speed plant (--kind).")
+    p.add_argument("files", nargs="+", metavar="FRF_FILE",
+                   help="CSV (f_hz with re,im or mag,phase_deg; '# quantity:' and '# units:' "
+                        "comment lines) or UFF dataset 58 (.uff, .unv); several FRFs of one "
+                        "excitation on the same frequency lines; the first is the one whose "
+                        "residues are 'residue' (give the driving point first)")
+    p.add_argument("--kind", choices=("structure",), default="structure",
+                   help="what was measured: 'structure' (FRFs of the machine structure, e.g. "
+                        "hammer tests at the work piece; the only kind so far)")
+    p.add_argument("--quantity", choices=QUANTITIES, default=None,
+                   help="the quantity of files that do not state it (default receptance)")
+    p.add_argument("--units", default=None, metavar="UNIT",
+                   help="units of CSV files that do not state them: m/N, mm/N, um/N, nm/N; "
+                        "m/s/N, mm/s/N; m/s^2/N, g/N (default the SI unit)")
+    p.add_argument("--band-hz", type=_FREQUENCY, nargs=2, metavar=("LO", "HI"), default=None,
+                   help="the band to fit [Hz] (default the whole measurement above 0 Hz)")
+    p.add_argument("--max-order", type=_ORDER, default=40, metavar="N",
+                   help=f"number of LSCF model orders (denominator degrees 2..2N), "
+                        f"{_ORDER.accepted} (default 40)")
+    p.add_argument("--modes-hz", type=_FREQUENCY, nargs="+", metavar="F", default=None,
+                   help="take the poles nearest to these natural frequencies [Hz] instead of "
+                        "the automatic rule")
+    add_common_options(p, plots=True)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Run ``servotune identify``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    int
+        The exit status: 0. Errors are raised, and reported by :func:`servotune.cli.main`
+        with status 1 (2 for arguments in conflict).
+    """
+    from .. import progress
+    from ..units import HZ_PER_RAD_S, RAD_S_PER_HZ
+
+    if args.band_hz is not None and args.band_hz[0] >= args.band_hz[1]:
+        raise UsageError(f"--band-hz {args.band_hz[0]:g} {args.band_hz[1]:g}: the low "
+                         "frequency must be below the high one")
+    files = [Path(f) for f in args.files]
+    names = [] if args.no_plots else list(FIGURES)
+    subject = files[0].stem + (f"+{len(files) - 1}" if len(files) > 1 else "")
+    out = RunOutput.for_args(args, "identify", subject, ["results.json", *names])
+    with progress.task(f"reading {len(files)} file(s)"):
+        from ..measured.ema import identify_modes
+        from ..measured.frf import read_frfs
+
+        frfs = read_frfs(files, quantity=args.quantity, units=args.units)
+    band = None if args.band_hz is None else tuple(f * RAD_S_PER_HZ for f in args.band_hz)
+    wanted = None if args.modes_hz is None else [f * RAD_S_PER_HZ for f in args.modes_hz]
+    with progress.task(f"identifying modes of {len(frfs)} FRF(s)"):
+        fit = identify_modes(frfs, band=band, max_order=args.max_order, frequencies=wanted)
+    result = {"command": "identify", "kind": args.kind, "files": [str(f) for f in files],
+              **fit.to_dict(), "folder": str(out.path),
+              "figures": [str(out.file(n)) for n in names],
+              "not_done": "updating an axis description from the modes (--axis) is not in "
+                          "this version"}
+    with progress.task(f"writing {out.path}"), out.writing() as folder:
+        if names:
+            save_figure(fit.plot_fit(), folder / names[0])
+            save_figure(fit.plot_stabilisation(), folder / names[1])
+        write_results(folder, result)
+    for text in fit.warnings:
+        print(f"WARNING: {text}", file=sys.stderr)
+    if args.json:
+        print_json(result)
+        return 0
+    lo, hi = fit.band
+    how = "chosen by the rule" if fit.chosen_by == "rule" else "nearest to --modes-hz"
+    print(f"{len(fit.modes)} mode(s) from {len(frfs)} {fit.frfs[0].quantity} FRF(s), "
+          f"{lo * HZ_PER_RAD_S:g}-{hi * HZ_PER_RAD_S:g} Hz, model orders up to "
+          f"{2 * fit.max_order} ({how}):")
+    print("  mode    f [Hz]   zeta [%]   residue (first FRF) [m/(N s)]   stable orders")
+    for k, m in enumerate(fit.modes, start=1):
+        r = m.residues[0]
+        print(f"  {k:4d} {m.frequency * HZ_PER_RAD_S:9.3f}  {100 * m.damping_ratio:8.3f}   "
+              f"{r.real:+.4e} {r.imag:+.4e}j   {m.stable_orders:5d}")
+    print(f"  FRF error (relative RMS over the band): {100 * fit.frf_error:.2f} %")
+    for note in fit.defaults:
+        print(f"  default taken: {note}")
+    for note in fit.notes:
+        print(f"  note: {note}")
+    print("  not done: updating an axis description from the modes (--axis)")
+    print(f"  wrote {out.path}")
+    return 0

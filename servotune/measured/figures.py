@@ -1,0 +1,115 @@
+"""Figures of a modal identification: the FRF fit and the stabilisation diagram.
+
+SI values come in; Hz and degrees appear only on the axes. Each function draws a
+:class:`~servotune.measured.ema.ModalIdentification` without computing anything, and returns a
+:class:`matplotlib.figure.Figure` built without pyplot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..plots import set_caption
+from ..units import HZ_PER_RAD_S
+
+__all__ = ["plot_frf_fit", "plot_stabilisation"]
+
+#: how each status of the stabilisation diagram is drawn: marker, colour, label
+_STATUS_STYLE = {
+    -1: ("x", "0.75", "damping outside the range"),
+    0: (".", "0.45", "new"),
+    1: ("^", "tab:orange", "stable in frequency"),
+    2: ("o", "tab:green", "stable in frequency and damping"),
+}
+
+
+def plot_frf_fit(result) -> Figure:
+    """Plot the measured against the synthesised FRFs over the band (magnitude and phase).
+
+    Parameters
+    ----------
+    result : servotune.measured.ema.ModalIdentification
+        The identification.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Magnitude (log) above the phase; each FRF measured (solid) and synthesised (dashed),
+        the identified natural frequencies as dotted vertical lines.
+    """
+    fig = Figure(figsize=(8, 6.5), layout="constrained")
+    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+    f = result.omega * HZ_PER_RAD_S
+    unit = result.frfs[0].unit
+    for k, frf in enumerate(result.frfs[:8]):
+        colour = f"C{k % 10}"
+        ax_mag.semilogy(f, np.abs(result.measured[k]), "-", color=colour, lw=2.5, alpha=0.45,
+                        label=f"{frf.name} measured")
+        ax_mag.semilogy(f, np.abs(result.synthesised[k]), "--", color=colour, lw=1.4,
+                        label=f"synthesised ({100 * result.frf_errors[k]:.1f} % RMS)")
+        ax_ph.plot(f, np.rad2deg(np.angle(result.measured[k])), "-", color=colour, lw=2.5,
+                   alpha=0.45)
+        ax_ph.plot(f, np.rad2deg(np.angle(result.synthesised[k])), "--", color=colour, lw=1.4)
+    for mode in result.modes:
+        for ax in (ax_mag, ax_ph):
+            ax.axvline(mode.frequency * HZ_PER_RAD_S, color="0.5", ls=":", lw=0.8)
+    ax_mag.set_ylabel(f"|H| [{unit}]")
+    ax_ph.set_ylabel("phase [deg]")
+    ax_ph.set_yticks([-180, -90, 0, 90, 180])
+    ax_ph.set_xlabel("frequency [Hz]")
+    ax_mag.set_title(f"{len(result.modes)} mode(s); relative RMS error "
+                     f"{100 * result.frf_error:.2f} % over the band")
+    ax_mag.legend(fontsize="small")
+    for ax in (ax_mag, ax_ph):
+        ax.grid(True, which="both", alpha=0.3)
+    more = (f"; the first 8 of {len(result.frfs)} FRFs are drawn" if len(result.frfs) > 8
+            else "")
+    return set_caption(fig, "Measured FRFs (solid, light) and the FRFs of the identified "
+                            "modes with the residual terms (dashed); natural frequencies "
+                            "dotted" + more)
+
+
+def plot_stabilisation(result) -> Figure:
+    """Plot the stabilisation diagram: every pole of every model order, and the chosen ones.
+
+    Parameters
+    ----------
+    result : servotune.measured.ema.ModalIdentification
+        The identification.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Model order over natural frequency, one marker per pole by its status; the chosen
+        poles circled in red; the sum of the measured magnitudes on a second axis.
+    """
+    diagram = result.diagram
+    fig = Figure(figsize=(9, 5.5), layout="constrained")
+    ax = fig.subplots()
+    f = diagram.frequency * HZ_PER_RAD_S
+    for status, (marker, colour, label) in _STATUS_STYLE.items():
+        mask = diagram.status == status
+        if mask.any():
+            ax.plot(f[mask], diagram.order[mask], marker, color=colour, ms=4, ls="none",
+                    label=label, mfc="none" if status == 1 else colour)
+    for mode in result.modes:
+        ax.plot(mode.frequency * HZ_PER_RAD_S, mode.order, "o", ms=10, mfc="none",
+                color="tab:red", mew=1.5)
+        ax.axvline(mode.frequency * HZ_PER_RAD_S, color="tab:red", ls=":", lw=0.8)
+    ax.plot([], [], "o", ms=10, mfc="none", color="tab:red", mew=1.5, label="chosen")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("model order")
+    low, high = (b * HZ_PER_RAD_S for b in diagram.band)
+    ax.set_xlim(low, high)
+    twin = ax.twinx()
+    twin.semilogy(result.omega * HZ_PER_RAD_S, np.sum(np.abs(result.measured), axis=0),
+                  color="0.3", lw=0.8)
+    twin.set_ylabel(f"sum of |H| measured [{result.frfs[0].unit}]")
+    ax.legend(fontsize="small", loc="upper left")
+    rule = diagram.rule
+    ax.set_title(f"Stabilisation diagram (LSCF): stable = within "
+                 f"{100 * rule.frequency_tolerance:g} % in frequency and "
+                 f"{100 * rule.damping_tolerance:g} % in damping of the order below")
+    return set_caption(fig, "Poles of every model order by their stability against the order "
+                            "below; the chosen poles circled (" + rule.describe() + ")")
