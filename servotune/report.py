@@ -396,7 +396,7 @@ def figure_metadata(fig, fmt: str = "png") -> dict | None:
     dict or None
         ``{"Description": caption}`` for a PNG with a caption, else None.
     """
-    from .plots import figure_caption
+    from .captions import figure_caption
 
     text = figure_caption(fig)
     return {"Description": text} if text and fmt == "png" else None
@@ -493,7 +493,7 @@ def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
     if figures is None:
         import io
 
-        from .plots import figure_caption
+        from .captions import figure_caption
 
         drawn = []
         for _, title, fig in tuning_figures(job):
