@@ -80,7 +80,7 @@ __all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis",
 SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "operation", "requirements",
             "tuning")
 _STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce",
-                   "coordinates", "ports", "port_tolerance"}
+                   "coordinates", "ports", "port_tolerance", "mass_name", "stiffness_name"}
 _REDUCE_KEYS = {"boundary", "n_modes", "f_max_hz"}
 _PORT_KEYS = {"node", "position", "direction"}
 _PORT_FIX = ('name each port by node and direction, "pad1.x" = { node = 101, direction = "x" }, '
@@ -535,8 +535,15 @@ def _read_matrices(table, folder: Path, file: Path):
         raise _err(file, "[structure] dof_map", f"{dof_map} does not exist",
                    "check the name (paths are relative to the axis folder)")
     ports = _ports(table, folder, file)
+    names = {}
+    for key in ("mass_name", "stiffness_name"):
+        if key in table:
+            if not isinstance(table[key], str) or not table[key].strip():
+                raise _err(file, f"[structure] {key}", f"got {table[key]!r}",
+                           "give the matrix' name inside the file, e.g. \"MHH\"")
+            names[key] = table[key].strip()
     try:
-        matrices = read_structure(paths["mass"], paths.get("stiffness"), dof_map)
+        matrices = read_structure(paths["mass"], paths.get("stiffness"), dof_map, **names)
     except MatrixFileError as exc:
         raise _err(file, key, str(exc), "fix or re-export the matrix files") from None
     if ports is not None:

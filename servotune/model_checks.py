@@ -224,15 +224,15 @@ def transmission_check(structure: ModalModel, drive: Drive,
     relative = structure_ratio / ratio - 1.0
     if structure_ratio < 0:
         others = [v for _, v in slides]
+        moves = ", ".join(f"{d} {v:+.4g}" for d, v in slides)
         if others and sum(v > 0 for v in others) > len(others) / 2:
             flipped = encoder
-            which = (f"the direction of the encoder DOF {encoder} is flipped (the pads and the "
-                     f"work piece, {', '.join(d for d, _ in slides)}, move +{ratio:.4g} m/rad "
-                     "as the drive says)")
+            which = (f"the direction of the encoder DOF {encoder} is flipped: most of the "
+                     f"slide moves positively, as the drive's sign says ({moves} m/rad)")
         elif others:
             flipped = rotor
             which = (f"the direction of the motor rotation {rotor} is flipped against the "
-                     f"slide ({', '.join(d for d, _ in slides)} move negatively too)")
+                     f"slide: most of it moves negatively too ({moves} m/rad)")
         else:
             flipped = None
             which = f"the direction of {encoder} or of {rotor} is flipped"
@@ -242,7 +242,8 @@ def transmission_check(structure: ModalModel, drive: Drive,
                     f"{per}, but the drive's ratio is +{ratio:.4g} m/rad: {which}. With linear "
                     "feedback the position loop would be positive feedback (unstable at any "
                     f"gain). Fix: reverse {flipped or 'that DOF'} in the export (multiply its "
-                    "row and column of M and K by -1) or in the DOF map, not the gains")
+                    "row and column of M and K by -1; a DOF map names DOFs, it carries no "
+                    "sign), not the gains")
     if abs(relative) > tolerance:
         return TransmissionCheck(
             **common, status="mismatch", flipped=None, passed=False,

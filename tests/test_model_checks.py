@@ -57,6 +57,10 @@ def test_a_flipped_direction_is_named_and_makes_the_loop_unstable(dof):
     assert check.flipped == dof
     assert check.structure_ratio == pytest.approx(-RATIO, rel=1e-9)
     assert "positive feedback" in check.message and f"reverse {dof}" in check.message
+    # it states how the slide really moves: +r with the encoder flipped, -r with the rotor
+    sign = 1.0 if dof == "encoder.x" else -1.0
+    assert f"wp.x {sign * RATIO:+.4g}" in check.message
+    assert "DOF map" not in check.message or "no sign" in check.message
     # what the message claims: with linear feedback the closed loop has a pole on the right
     assert closed_loop_unstable(structure, small_drive())
 

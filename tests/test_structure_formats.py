@@ -1,9 +1,12 @@
 """More FE export formats: Nastran OUTPUT4 (through pyyeti's reader), Harwell-Boeing files as
 scipy writes them, and ports named from node numbers and directions of an export."""
 
+import json
+
 import numpy as np
 import pytest
 import scipy.io
+import scipy.linalg
 import scipy.sparse as sp
 from numpy.testing import assert_allclose
 
@@ -167,3 +170,28 @@ def test_ports_file_format_errors(tmp_path):
     (tmp_path / "q.csv").write_text("port,node,x,y,z,direction\nwp.x,,a,b,c,x\n")
     with pytest.raises(PortError, match=r"line 2: port 'wp\.x' has neither"):
         read_ports(tmp_path / "q.csv")
+
+
+def test_op4_matrices_by_their_names(tmp_path, pair, capsys):
+    """Nastran's modal-space names (MHH/KHH) are read by default; other names are given in
+    axis.toml ([structure] mass_name / stiffness_name) or to servotune check
+    (--mass-name / --stiffness-name); a missing name says how to give it."""
+    op4 = pytest.importorskip("pyyeti.nastran.op4")
+    mass, stiffness = pair
+    op4.write(str(tmp_path / "h.op4"), ["MHH", "KHH"], [mass, stiffness], binary=False)
+    data = read_structure(tmp_path / "h.op4")
+    assert_allclose(data.stiffness.toarray(), stiffness, rtol=1e-15)
+    op4.write(str(tmp_path / "x.op4"), ["MXX", "KXX"], [mass, stiffness], binary=False)
+    with pytest.raises(MatrixFileError, match=r"holds \['KXX', 'MXX'\].*--mass-name"):
+        read_structure(tmp_path / "x.op4")
+    data = read_structure(tmp_path / "x.op4", mass_name="MXX", stiffness_name="KXX")
+    assert_allclose(data.mass.toarray(), mass, rtol=1e-15)
+    from servotune.cli import main
+
+    assert main(["check", str(tmp_path / "x.op4"), "--mass-name", "MXX", "--stiffness-name",
+                 "KXX", "--json", "--out", str(tmp_path / "out")]) in (0, 1)
+    out = json.loads(capsys.readouterr().out)
+    w2 = scipy.linalg.eigh(stiffness, mass, eigvals_only=True)
+    f_ref = np.sqrt(np.clip(w2, 0.0, None)) / (2 * np.pi)
+    f_ref = f_ref[f_ref > 1e-6 * f_ref.max()]
+    assert_allclose(np.sort(out["free_free_frequencies_hz"])[-len(f_ref):], f_ref, rtol=1e-8)

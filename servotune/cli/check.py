@@ -50,6 +50,12 @@ def add_parser(subparsers) -> None:
                    help="MASS [STIFFNESS] files (one .npz/.mat/.op4 may hold both), or an axis "
                         "folder")
     p.add_argument("--dof-map", type=Path, help="CSV naming the DOFs (name, or node,dof)")
+    p.add_argument("--mass-name", metavar="NAME",
+                   help="the mass matrix' name inside an .npz/.mat/.op4 file (default: the "
+                        "usual names, e.g. MAA, MGG, MHH, mass)")
+    p.add_argument("--stiffness-name", metavar="NAME",
+                   help="the stiffness matrix' name inside the file (default: KAA, KGG, KHH, "
+                        "stiffness, ...)")
     p.add_argument("--ports", type=Path,
                    help="CSV naming ports from node numbers (port,node,direction) or positions "
                         "(port,x,y,z,direction; needs --coordinates)")
@@ -149,7 +155,9 @@ def run(args) -> int:
         stiffness = args.matrices[1] if len(args.matrices) == 2 else None
         with progress.task(f"reading {args.matrices[0]}"):
             data = io.read_structure(args.matrices[0], stiffness, args.dof_map,
-                                     ports=args.ports, coordinates=coords)
+                                     ports=args.ports, coordinates=coords,
+                                     mass_name=args.mass_name,
+                                     stiffness_name=args.stiffness_name)
         source, subject = data.source, args.matrices[0].stem
         if not args.boundary and data.n > DENSE_LIMIT:
             raise ValueError(f"{source}: {data.n} DOFs; give --boundary DOF ... (and "

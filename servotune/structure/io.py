@@ -73,8 +73,12 @@ SYMMETRY_TOLERANCE = 1e-8  # max |A - A^T| relative to max |A|
 _MTX = (".mtx", ".mmf", ".mm")
 _HB = (".hb", ".rsa", ".rua", ".hbmat", ".hbm")
 _OP4 = (".op4",)
-_MASS_NAMES = ("mass", "m", "mass_matrix", "maa", "mgg", "mff", "mll")
-_STIFFNESS_NAMES = ("stiffness", "k", "stiffness_matrix", "kaa", "kgg", "kff", "kll")
+_MASS_NAMES = ("mass", "m", "mass_matrix", "maa", "mgg", "mff", "mll", "mhh")
+_STIFFNESS_NAMES = ("stiffness", "k", "stiffness_matrix", "kaa", "kgg", "kff", "kll", "khh")
+#: How to name a matrix the default names miss.
+NAME_HINT = ("name it: [structure] mass_name / stiffness_name in axis.toml, --mass-name / "
+             "--stiffness-name of servotune check, or mass_name= / stiffness_name= of "
+             "read_structure")
 _BOTH = (".npz", ".mat", ".op4")  # files that may hold both matrices
 
 
@@ -232,8 +236,8 @@ def _from_op4(path, names):
         if n.lower() in data:
             return data[n.lower()]
     raise MatrixFileError(f"{path}: none of the matrices {[n.upper() for n in names]} is in "
-                          f"the file (it holds {sorted(k.upper() for k in data)}); name the "
-                          "matrix")
+                          f"the file (it holds {sorted(k.upper() for k in data)}); "
+                          f"{NAME_HINT}")
 
 
 def _from_npz(path, name):
@@ -271,7 +275,7 @@ def _from_mat(path, names):
         if n.lower() in lookup:
             return data[lookup[n.lower()]]
     raise MatrixFileError(f"{path}: none of the variables {list(names)} is in the file (it "
-                          f"holds {sorted(lookup.values())}); name the variable")
+                          f"holds {sorted(lookup.values())}); {NAME_HINT}")
 
 
 def read_matrix(path, name: str | None = None):
