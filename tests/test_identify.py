@@ -216,3 +216,46 @@ def test_frfs_on_different_lines_are_refused(tmp_path):
     b.write_text("f_hz,re,im\n" + "\n".join(f"{f},{1e-6},0" for f in F_HZ[::2]) + "\n")
     with pytest.raises(ValueError, match="different frequency lines"):
         identify_modes(read_frfs([a, b]))
+
+
+@pytest.mark.parametrize("quantity, power", [("mobility", 1), ("accelerance", 2)])
+def test_mobility_and_accelerance_give_the_receptance_residues(quantity, power, tmp_path):
+    # (j w)^power H: the same poles, and LSFD reports the residues of the receptance
+    jw = 2j * np.pi * F_HZ
+    h = noisy(jw**power * receptance(0), 0.01, seed=21)
+    path = write_csv(tmp_path / "h.csv", h, header=f"# quantity: {quantity}\n")
+    frf = read_frf_csv(path)
+    assert frf.quantity == quantity and "units" in frf.defaults[0]
+    fit = identify_modes([frf])
+    check_modes(fit, 0, 0.01)
+    assert fit.frf_error < 0.02
+
+
+def test_the_rule_keeps_poles_stable_over_orders_and_drops_drifting_ones():
+    from servotune.measured.ema import (
+        PoleEstimates,
+        SelectionRule,
+        choose_poles,
+        stabilisation_diagram,
+    )
+
+    def pole(f_hz, zeta):
+        w = 2 * np.pi * f_hz
+        return complex(-zeta * w, w * np.sqrt(1 - zeta**2))
+
+    orders = tuple(range(2, 22, 2))
+    poles = tuple(np.array([
+        pole(100.0 * (1 + 1e-4 * k), 0.02),        # stable: 0.01 % steps
+        pole(200.0, 0.02 * 1.2**k),                # damping drifts 20 % per order
+        pole(300.0 * (1 + 0.05 * k), 0.02),        # frequency drifts 5 % per order
+        pole(150.0, -0.01),                        # unstable pole: damping out of range
+    ]) for k in range(len(orders)))
+    diagram = stabilisation_diagram(PoleEstimates(orders, poles, (2 * np.pi, 2 * np.pi * 900)),
+                                    SelectionRule())
+    at = {round(f): diagram.status[(diagram.order == 20) & (np.isclose(
+        diagram.frequency / (2 * np.pi), f, rtol=0.5e-3))] for f in (100.09, 200.0, 150.0)}
+    assert at[100].tolist() == [2] and at[200].tolist() == [1] and at[150].tolist() == [-1]
+    chosen, _ = choose_poles(diagram)
+    assert len(chosen) == 1 and diagram.frequency[chosen[0]] / (2 * np.pi) == pytest.approx(
+        100.0, rel=2e-3)
+    assert diagram.run[chosen[0]] >= 5

@@ -203,8 +203,14 @@ class StabilisationDiagram:
     band: tuple[float, float]
     rule: SelectionRule
 
-    def physical(self) -> np.ndarray:
+    def physical(self, edges: bool = True) -> np.ndarray:
         """Return the indices of the poles that meet the rule (stable long enough, off the edges).
+
+        Parameters
+        ----------
+        edges : bool
+            Leave out the poles in the rule's margins at the band's edges (default); False
+            keeps them (for poles picked by frequency).
 
         Returns
         -------
@@ -212,7 +218,7 @@ class StabilisationDiagram:
             Indices into the arrays of the diagram.
         """
         low, high = self.band
-        margin = self.rule.edge_margin * (high - low)
+        margin = self.rule.edge_margin * (high - low) if edges else 0.0
         inside = (self.frequency >= low + margin) & (self.frequency <= high - margin)
         return np.flatnonzero((self.status == 2) & (self.run >= self.rule.min_stable_orders)
                               & inside)
@@ -566,9 +572,9 @@ def stabilisation_diagram(estimates: PoleEstimates,
                                 estimates.band, rule)
 
 
-def _groups(diagram: StabilisationDiagram) -> list[np.ndarray]:
+def _groups(diagram: StabilisationDiagram, edges: bool = True) -> list[np.ndarray]:
     """The physical poles grouped into modes (neighbours in frequency within tol_f)."""
-    idx = diagram.physical()
+    idx = diagram.physical(edges)
     if not idx.size:
         return []
     idx = idx[np.argsort(diagram.frequency[idx])]
@@ -596,8 +602,8 @@ def choose_poles(diagram: StabilisationDiagram, frequencies=None
         The poles with their status.
     frequencies : sequence of float, optional
         Natural frequencies [rad/s] to pick the nearest poles for, instead of the rule: the
-        nearest mode of the rule, or, where the rule finds none, the nearest pole of the
-        highest order with a damping ratio in the range.
+        nearest mode of the rule (the band's edge margins included), or, where the rule finds
+        none, the nearest pole of the highest orders with a damping ratio in the range.
 
     Returns
     -------
@@ -612,7 +618,7 @@ def choose_poles(diagram: StabilisationDiagram, frequencies=None
         When the rule finds no pole, when there is no pole to pick, or when two frequencies
         pick the same pole.
     """
-    groups = _groups(diagram)
+    groups = _groups(diagram, edges=frequencies is None)
     chosen = [_representative(diagram, g) for g in groups]
     if frequencies is None:
         if not chosen:
