@@ -316,10 +316,12 @@ def test_the_example_installs_with_pip_offline(tmp_path):
     reason = _offline_build_possible()
     if reason is not None:
         pytest.skip(f"no offline build: {reason}")
-    target = tmp_path / "site"
+    target, source = tmp_path / "site", tmp_path / "dahl_friction"
+    shutil.copytree(EXAMPLE, source, ignore=shutil.ignore_patterns("__pycache__", "build",
+                                                                   "*.egg-info"))
     pip = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
                           "--no-build-isolation", "--no-index", "--target", str(target),
-                          str(EXAMPLE)], capture_output=True, text=True, timeout=300)
+                          str(source)], capture_output=True, text=True, timeout=300)
     assert pip.returncode == 0, pip.stderr
     check = subprocess.run(
         [sys.executable, "-c", "from servotune.friction.law import friction_law; "
