@@ -88,7 +88,8 @@ def drawn_labels(ax) -> list[str]:
 
 def style_key(ax) -> list[str]:
     """What the line styles of an axes mean, from the curves drawn there (two points or more,
-    with a legend label): ``["solid: after, standing", "dashed: before, standing"]``.
+    with a legend label), each label in double quotes: ``['solid (1): "after, standing"',
+    'dashed (1): "before, standing"']``.
 
     Parameters
     ----------
@@ -107,4 +108,5 @@ def style_key(ax) -> list[str]:
                 "None", "", " ", "none"):
             continue
         groups.setdefault(ls_name(line.get_linestyle()), []).append(label)
-    return [f"{style} ({len(labels)}): {', '.join(labels)}" for style, labels in groups.items()]
+    return [f"{style} ({len(labels)}): " + ", ".join(f'"{x}"' for x in labels)
+            for style, labels in groups.items()]

@@ -119,8 +119,13 @@ def plot_mode_peaks(mode_peaks, bounds=None, axis_name: str | None = None) -> Fi
             notes.append(f"from C = {c[np.argmax(same)]:.2g} N s/m the {f:.0f} Hz track "
                          f"follows the same pole as the {merged_with:.0f} Hz one (the nearest "
                          "pole is followed, so one of the two modes is lost there; drawn once)")
-    ax.axvline(mode_peaks.c_chosen, color="k", ls="--", lw=1.0,
-               label=f"chosen C = {mode_peaks.c_chosen:.3g} N s/m")
+    chosen = mode_peaks.c_chosen
+    at_bound = (" (at the lower bound)" if np.isclose(chosen, lo, rtol=1e-6, atol=0.0) else
+                " (at the upper bound)" if np.isclose(chosen, hi, rtol=1e-6, atol=0.0) else "")
+    if bounds is None:
+        at_bound = ""
+    ax.axvline(chosen, color="k", ls="--", lw=1.0,
+               label=f"chosen C = {chosen:.3g} N s/m{at_bound}")
     ax.set_xlabel("guide-way damping C [N s/m]")
     ax.set_ylabel("peak of the mode's compliance term [m/N]")
     head = "Several modes, one C: each mode's compliance peak against C (sec 5.2)"
@@ -131,7 +136,7 @@ def plot_mode_peaks(mode_peaks, bounds=None, axis_name: str | None = None) -> Fi
             f"own compliance peak |R|/|Re lambda| against the guide-way damping C, on "
             f"{len(c)} values of C from {c[0]:.3g} to {c[-1]:.3g} N s/m (the tuned design's "
             f"gains); solid: the tracks; dashed vertical: the chosen C "
-            f"{mode_peaks.c_chosen:.3g} N s/m; dots: a minimum inside the grid, squares: the "
+            f"{chosen:.3g} N s/m{at_bound}; dots: a minimum inside the grid, squares: the "
             "smallest value where a track ends or meets another, triangles: the smallest value at "
             "a bound."]
     text += [n[0].upper() + n[1:] + "." for n in notes]

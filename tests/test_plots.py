@@ -190,7 +190,7 @@ def test_bode_phase_is_wrapped_into_the_range_where_the_margins_are_read():
     assert_allclose(ms.get_xdata(), [analysis.ms_frequency * HZ_PER_RAD_S])
     assert "feeding 20 mm/s: sliding" in ax_mag.get_title()
     caption = plots.figure_caption(fig)
-    assert "feeding 20 mm/s: sliding" in caption and "solid (1): velocity loop" in caption
+    assert "feeding 20 mm/s: sliding" in caption and 'solid (1): "velocity loop"' in caption
     assert f"PM {analysis.phase_margin_deg:.1f} deg" in caption and "dashed" not in caption
 
 
