@@ -150,7 +150,7 @@ def test_magnitude_phase_and_units_are_read_to_si(tmp_path):
     assert frf.quantity == "receptance" and frf.defaults == ()
     plain = tmp_path / "plain.csv"
     plain.write_text("f_hz,re,im\n1,1,0\n2,1,0\n")
-    assert "a receptance in m/N taken" in read_frf_csv(plain).defaults[0]
+    assert "a receptance in m/N (no '# quantity:'" in read_frf_csv(plain).defaults[0]
 
 
 def test_modes_hz_picks_the_nearest_poles(tmp_path):

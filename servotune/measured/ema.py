@@ -439,22 +439,24 @@ def check_frfs(frfs) -> tuple[np.ndarray, np.ndarray, str]:
     return omega, np.array([f.values for f in frfs]), first.quantity
 
 
-def _band_indices(omega: np.ndarray, band) -> tuple[int, int, list[str], list[str]]:
-    """The first and last index of the band on the grid; the default taken, the notes."""
+def _band_indices(omega: np.ndarray, band, label: str
+                  ) -> tuple[int, int, list[str], list[str]]:
+    """The first and last index of the band on the grid; the default taken, the notes;
+    errors start with ``label`` (the measurement)."""
     defaults, notes = [], []
     positive = np.flatnonzero(omega > 0)
     f_hz = omega * HZ_PER_RAD_S
     if band is None:
         lo_i, hi_i = int(positive[0]), omega.size - 1
-        defaults.append(f"band {f_hz[lo_i]:g}-{f_hz[hi_i]:g} Hz taken: the whole measurement "
-                     "(no --band-hz)")
+        defaults.append(f"band {f_hz[lo_i]:g}-{f_hz[hi_i]:g} Hz, the whole measurement above "
+                        "0 Hz (no --band-hz)")
     else:
         lo, hi = (float(b) for b in band)
+        given = f"{label}: the band {lo * HZ_PER_RAD_S:g}-{hi * HZ_PER_RAD_S:g} Hz"
         if not (0 < lo < hi):
-            raise ValueError(f"the band {lo * HZ_PER_RAD_S:g}-{hi * HZ_PER_RAD_S:g} Hz must "
-                             "have 0 < low < high")
+            raise ValueError(f"{given} must have 0 < low < high")
         if lo > omega[-1] or hi < omega[positive[0]]:
-            raise ValueError(f"the band {lo * HZ_PER_RAD_S:g}-{hi * HZ_PER_RAD_S:g} Hz lies "
+            raise ValueError(f"{given} lies "
                              f"outside the measurement ({f_hz[positive[0]]:g}-{f_hz[-1]:g} "
                              "Hz): give a band inside it")
         lo_i = int(np.flatnonzero(omega >= lo * (1 - 1e-12))[0])
@@ -463,8 +465,9 @@ def _band_indices(omega: np.ndarray, band) -> tuple[int, int, list[str], list[st
         if lo * (1 - 1e-9) < omega[positive[0]] or hi * (1 + 1e-9) > omega[-1]:
             notes.append(f"band cut to the measurement: {f_hz[lo_i]:g}-{f_hz[hi_i]:g} Hz")
     if hi_i - lo_i < 8:
-        raise ValueError(f"the band {f_hz[lo_i]:g}-{f_hz[hi_i]:g} Hz holds {hi_i - lo_i + 1} "
-                         "frequency lines; give a wider band (at least 9 lines)")
+        raise ValueError(f"{label}: the band {f_hz[lo_i]:g}-{f_hz[hi_i]:g} Hz holds "
+                         f"{hi_i - lo_i + 1} frequency line(s); give a wider band or a finer "
+                         "measurement (at least 9 lines)")
     return lo_i, hi_i, defaults, notes
 
 
@@ -725,10 +728,14 @@ def identify_modes(frfs, band=None, max_order: int = 40, frequencies=None,
     if max_order < rule.min_stable_orders:
         raise ValueError(f"max_order {max_order} is below the {rule.min_stable_orders} "
                          "consecutive orders the rule asks for; give a larger one")
-    lo_i, hi_i, defaults, notes = _band_indices(omega, band)
+    label = frfs[0].name + (f" and {len(frfs) - 1} more FRF(s)" if len(frfs) > 1 else "")
+    lo_i, hi_i, defaults, notes = _band_indices(omega, band, label)
     estimates = pole_estimates(omega, values, quantity, (omega[lo_i], omega[hi_i]), max_order)
     diagram = stabilisation_diagram(estimates, rule)
-    chosen, picks = choose_poles(diagram, frequencies)
+    try:
+        chosen, picks = choose_poles(diagram, frequencies)
+    except ValueError as exc:
+        raise ValueError(f"{label}: {exc}") from None
     order = sorted(range(len(chosen)), key=lambda k: diagram.frequency[chosen[k]])
     chosen = [chosen[k] for k in order]
     requested = (None if frequencies is None else [float(frequencies[k]) for k in order])

@@ -246,7 +246,7 @@ def read_frf_csv(path, quantity: str | None = None, units: str | None = None) ->
         q = _check_quantity(quantity, "--quantity")
     else:
         q = "receptance"
-        defaults.append(f"{path.name}: a receptance taken (no '# quantity:' line, no --quantity)")
+        defaults.append(f"{path.name}: a receptance (no '# quantity:' line, no --quantity)")
     if "units" in stated:
         text, line = stated["units"]
         factor = _unit_factor(q, text, f"{path}, line {line}")
@@ -255,10 +255,10 @@ def read_frf_csv(path, quantity: str | None = None, units: str | None = None) ->
     else:
         factor = 1.0
         if "quantity" in stated or quantity is not None:
-            defaults.append(f"{path.name}: units {QUANTITIES[q][0]} taken (no '# units:' line)")
+            defaults.append(f"{path.name}: units {QUANTITIES[q][0]} (no '# units:' line)")
         else:
-            defaults[-1] = (f"{path.name}: a receptance in m/N taken (no '# quantity:' or "
-                         "'# units:' line, no --quantity)")
+            defaults[-1] = (f"{path.name}: a receptance in m/N (no '# quantity:' or "
+                            "'# units:' line, no --quantity)")
     cartesian, polar = table.has("re", "im"), table.has("mag", "phase_deg")
     table.require("f_hz", hint=CSV_HINT)
     if cartesian and polar:
@@ -405,7 +405,7 @@ def _uff_record(path: Path, record: int, data: dict, factor: float, asked: str |
     if stated is None:
         q = asked or "receptance"
         defaults.append(f"{path.name} record {record}: ordinate type {ordinate} does not say the "
-                     f"quantity; a {q} taken" + ("" if asked else " (no --quantity)"))
+                     f"quantity; a {q}" + ("" if asked else " (no --quantity)"))
     else:
         if asked is not None and asked != stated:
             raise _uff_error(path, f"holds a {stated} (ordinate type {ordinate}), but a "
