@@ -1645,4 +1645,18 @@ def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress
             ("linear: the viscous pads without a drive are the system itself (the paper's "
              "sec 4.1 analysis); the dense check of the compliance is the whole verification",),
             ())
+    verdict = out.get("verdict")
+    if verdict is not None and verdict.verified:
+        # a claim is verified only where the structure model holds: a reduced model whose
+        # kept fixed-interface modes do not reach the band (with its margin) cannot verify it
+        from .model_checks import band_coverage
+
+        coverage = band_coverage(axis.structure, axis.requirements)
+        if not coverage.covered:
+            out["verdict"] = dataclasses.replace(
+                verdict, verified=False,
+                reasons=(*verdict.reasons, f"the structure model does not cover the band: "
+                         f"{coverage.message}"),
+                not_checked=(*verdict.not_checked, "the band beyond the reduced model's "
+                             "fixed-interface modes"))
     return AxisTuning(**out)

@@ -473,3 +473,15 @@ def test_check_of_an_exported_axis_compares_the_reduction_with_the_full_export(t
     check = out["reduction_check"]
     assert check["passed"] is True and check["n_missing_modes"] == 0
     assert check["max_frequency_error"] < check["frequency_tolerance"]
+
+
+def test_a_model_that_does_not_cover_the_band_verifies_nothing(tmp_path, capsys):
+    """One fixed-interface mode kept, far below the band's top: whatever the simulations find,
+    the verdict is NOT VERIFIED with the coverage named (the claims rest on a model that
+    leaves out the modes of the band)."""
+    write_axis(tmp_path / "ax", reduce="n_modes = 1")
+    code = main(["tune", str(tmp_path / "ax"), "--json", "--no-plots", "--starts", "1",
+                 "--workers", "1", "--out", str(tmp_path / "out")])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 1 and out["verified"] is False
+    assert any("does not cover the band" in r for r in out["verdict"]["reasons"])
