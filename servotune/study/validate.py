@@ -68,7 +68,7 @@ def read_axis_tables(folder, study_file) -> dict:
             return tomllib.load(handle)
     except tomllib.TOMLDecodeError as exc:
         raise StudyFormatError(
-            f"{file}: not valid TOML: {exc}; fix the syntax there (the axis of "
+            f"{file}: not valid TOML: {exc}; fix the syntax there or just before (the axis of "
             f"[study] axes in {study_file})") from None
     except UnicodeDecodeError as exc:
         raise StudyFormatError(f"{file}: not UTF-8 text ({exc}); save it as UTF-8 (the axis of "
@@ -124,20 +124,29 @@ def _resolve(tables: dict, path: str):
     return node, None
 
 
-def _close(path: str, walked: list[str], candidates, message: str = "") -> str:
+def _close(tables: dict, path: str, walked: list[str], candidates, message: str = "") -> str:
     """'did you mean ...' for the unknown part of a path (also among the names a loader's
-    message quotes)."""
+    message quotes); the paths that are in the description first, and only those if any."""
     part = path.split(".")[len(walked)]
     quoted = re.findall(r"'([A-Za-z_][A-Za-z0-9_]*)'", message)
     names = [n for n in dict.fromkeys([*candidates, *quoted]) if n != part]
     matches = difflib.get_close_matches(part, names, n=3, cutoff=0.6)
     parts = path.split(".")
-    full = ['"' + ".".join([*walked, m, *parts[len(walked) + 1:]]) + '"' for m in matches]
+    full = [".".join([*walked, m, *parts[len(walked) + 1:]]) for m in matches]
+    there = [f for f in full if _there(tables, f)]
+    full = [f'"{f}"' for f in (there or full)]
     if full:
         return f"did you mean {' or '.join(full)}?"
     shown = ", ".join(sorted(str(c) for c in candidates)[:12])
     return (f"the fields there are {shown}" if shown else
             "check the path against the axis description")
+
+
+def _there(tables: dict, path: str) -> bool:
+    try:
+        return _resolve(tables, path)[1] is None
+    except ValueError:
+        return False
 
 
 def _build(tables: dict, file: Path, values, relative) -> str | None:
@@ -171,7 +180,7 @@ def _check_paths(study, folder: str, tables: dict) -> None:
                 raise _err(study.file, where,
                            f"{file} has no field {v.path.split('.')[len(walked)]!r} in "
                            f"{section}, and a relative variation multiplies the number there",
-                           _close(v.path, walked, candidates))
+                           _close(tables, v.path, walked, candidates))
             # an absolute value may set a field the description leaves to its default: the
             # loader says whether the field exists
             value = v.values[0] if v.values else v.draw(_rng(study))
@@ -180,7 +189,7 @@ def _check_paths(study, folder: str, tables: dict) -> None:
                 raise _err(study.file, where,
                            f"{file} has no field {v.path.split('.')[len(walked)]!r} in "
                            f"{section} and the axis loader refuses it ({reason})",
-                           _close(v.path, walked, candidates, reason))
+                           _close(tables, v.path, walked, candidates, reason))
             continue
         kind = _kind(leaf)
         if v.relative:
