@@ -1055,6 +1055,8 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     servotune.tuning.solve.tune : the optimisation this runs.
     servotune.tuning.verify.verify : the dense linear check of a design.
     """
+    if axis.friction is not None:
+        axis.friction.require_lugre("servotune tune")
     settings = axis.tuning
     free = expand_free(settings.free if free is None else free)
     chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight

@@ -7,6 +7,7 @@ constant sigma1/sigma0 of Bianchi et al. 2014; the usable continuous thrust torq
 """
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -139,3 +140,38 @@ def test_rigid_body_mass_needs_every_node(tmp_path):
         cb_check(model, coordinates={"1": (0.0, 0.0, 0.0)})
     check = cb_check(model, coordinates={"1": (0.0, 0.0, 0.0), "2": (1.0, 0.0, 0.0)})
     assert check.rigid_body_mass[0, 0] == pytest.approx(5.0)
+
+
+@pytest.mark.parametrize("command", [["tune", "--no-simulation"], ["nlcompliance",
+                                                                   "--force-pp", "600"],
+                                     ["table3"]])
+def test_a_law_without_lugre_data_is_refused_by_the_jobs_that_need_it(tmp_path, capsys,
+                                                                       command):
+    """The bundled axis with the GMS law: the jobs whose regime models take the LuGre contact
+    refuse it in one clear error naming the law and what works (no internal error); the
+    time-domain and linear commands keep working with it (tests/test_friction_gms.py)."""
+    import re
+    import shutil
+
+    from test_friction_gms import P
+
+    folder = tmp_path / "axis"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "models" / "paper_x_axis", folder)
+    text = re.sub(r"variation = \{[^}]*\}[^\n]*\n(\s+#[^\n]*\n)*", "",
+                  (folder / "axis.toml").read_text())
+    start, end = text.index("[friction.lugre]"), text.index("[drive]")
+    table = "\n".join(f"{k} = {v!r}" for k, v in (
+        ("stiffness", list(P.stiffness)), ("fractions", list(P.fractions)),
+        ("damping", list(P.damping)), ("fc", P.fc), ("fs", P.fs), ("vs", P.vs),
+        ("delta", P.delta), ("sigma2", P.sigma2), ("attraction", P.attraction)))
+    (folder / "axis.toml").write_text(text[:start] + "[friction.gms]\n" + table + "\n\n"
+                                      + text[end:])
+    name, *flags = command
+    args = [name, str(folder)]
+    code = main([*args, *flags, "--json", "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert code == 1, captured.err
+    out = json.loads(captured.out)
+    assert out["error_kind"] == "input"
+    assert "'gms'" in out["error"] and f"servotune {name}" in out["error"]
+    assert "internal error" not in captured.err
