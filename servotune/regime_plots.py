@@ -28,10 +28,10 @@ def plot_mode_peaks(mode_peaks, bounds=None, axis_name: str | None = None) -> Fi
     track's smallest peak is marked as its best C only where it lies inside the grid; at an
     end of the grid (a bound of C) or where the track ends (the mode turns over-damped or
     jumps) it is said so instead. A point more than :data:`SPIKE_FACTOR` times both its
-    neighbours is drawn as a cross, not joined to them: there two closed-loop poles come
-    close, where the split of the compliance into one term per mode is ill-conditioned (the
-    terms grow and cancel in the sum), so it is no peak of the compliance. Where two tracks
-    follow the same pole (the modes have merged) the later one is drawn once.
+    neighbours is drawn as a cross, not joined to them: the grid of C does not resolve it
+    (near-coincident poles, whose terms grow and cancel in the sum, or a track stepping onto
+    another pole for one point). Where two tracks follow the same pole (the nearest pole is
+    followed, so one mode is lost there) the later one is drawn once.
 
     Parameters
     ----------
@@ -134,16 +134,18 @@ def plot_mode_peaks(mode_peaks, bounds=None, axis_name: str | None = None) -> Fi
     ax.legend(fontsize=7)
     text = [f"{'The axis ' + axis_name + ': e' if axis_name else 'E'}ach closed-loop mode's "
             f"own compliance peak |R|/|Re lambda| against the guide-way damping C, on "
-            f"{len(c)} values of C from {c[0]:.3g} to {c[-1]:.3g} N s/m (the tuned design's "
-            f"gains); solid: the tracks; dashed vertical: the chosen C "
-            f"{chosen:.3g} N s/m{at_bound}; dots: a minimum inside the grid, squares: the "
+            f"{len(c)} values of C from {c[0]:.3g} to {c[-1]:.3g} N s/m (the pads as viscous "
+            f"dampers C, the tuned design's gains); solid: the tracks; dashed vertical: the "
+            f"chosen C {chosen:.3g} N s/m{at_bound}; dots: a minimum inside the grid, squares: the "
             "smallest value where a track ends or meets another, triangles: the smallest value at "
             "a bound."]
     text += [n[0].upper() + n[1:] + "." for n in notes]
     if spikes_total:
-        text.append(f"Crosses ({spikes_total}): points more than {SPIKE_FACTOR:g} times both "
-                    "neighbours, where two poles come close and the split into modal terms is "
-                    "ill-conditioned; not joined to the track and no peak of the compliance.")
+        text.append(f"Crosses ({spikes_total}): single points more than {SPIKE_FACTOR:g} "
+                    "times both neighbours, not joined to their track: this grid of C does not "
+                    "resolve them (near-coincident poles, whose modal terms grow and cancel in "
+                    "the sum, or a track stepping onto another pole for one point); read the "
+                    "track between them.")
     set_caption(fig, " ".join(text))
     return fig
 

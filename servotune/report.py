@@ -473,15 +473,17 @@ def tuning_report_html(job, figures=None, base: Path | None = None) -> str:
     job : servotune.design.AxisTuning
         The tuning job (:func:`servotune.design.tune_axis`).
     figures : sequence of (path, str), optional
-        (PNG path, title) of figures already written (their bytes are embedded); without them
-        the figures are drawn here.
+        (PNG path, title) of figures already written (their bytes are embedded, their
+        captions read from the PNGs' ``Description``, :func:`png_caption`); without them the
+        figures are drawn here.
     base : pathlib.Path, optional
         Folder the paths shown are relative to.
 
     Returns
     -------
     str
-        The HTML page (figures embedded as base64 PNG).
+        The HTML page (figures embedded as base64 PNG, each a ``<figure>`` with its title and
+        its caption in a ``<figcaption>``).
     """
     import base64
     import datetime
