@@ -81,6 +81,8 @@ def test_a_mistyped_path_ends_the_study_before_any_sample_with_the_close_match(
      ["'high' is a text", "friction.lugre.fc is a number", "without quotes"]),
     ('[vary."friction.lugre.fc"]\nvalues = ["high", 2000.0]\n', ["mixes numbers and texts"]),
     ('[vary."friction.pads"]\nvalues = [2.0]\n', ["2.0 is a number", "is a list"]),
+    ('[vary."axis.name"]\ndistribution = "uniform"\nlow = 1\nhigh = 2\n',
+     ["draws numbers, but axis.name is a text", "values = [...]"]),
     # a value the loader refuses in every sample: named with the loader's reason
     ('[vary."drive.velocity_loop.kp"]\nvalues = [3.0, -1.0]\n',
      ["value -1.0", "refuses every sample with it", "[drive.velocity_loop] kp"]),

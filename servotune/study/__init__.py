@@ -17,13 +17,16 @@ from .spec import (
     apply_values,
     load_study,
 )
+from .spread import FrictionSpreadSamples, spread_from_study
 from .summary import StudySummary, summarise, summary_html, write_summary
 from .tasks import run_sample
+from .validate import check_study, read_axis_tables
 
 __all__ = [
     "Study", "Variation", "Sample", "StudyFormatError", "load_study", "apply_values",
-    "COMPUTE", "DISTRIBUTIONS",
+    "COMPUTE", "DISTRIBUTIONS", "check_study", "read_axis_tables",
     "run_sample",
     "StudyRun", "StudyFolderError", "run_study", "study_folder", "read_rows",
     "StudySummary", "summarise", "summary_html", "write_summary",
+    "spread_from_study", "FrictionSpreadSamples",
 ]

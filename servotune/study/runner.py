@@ -11,7 +11,9 @@ A re-run with the same study and folder skips every sample whose row is there (t
 hash of the axis file, the values and the settings, so a changed study recomputes what changed).
 A worker that dies mid-task loses nothing already written: dask's scheduler runs its tasks
 again on the other workers (the nanny restarts the dead one). Ctrl-C cancels what is left and
-closes the cluster; the rows already written stay and the next run resumes from them.
+closes the cluster; the rows already written stay and the next run resumes from them. The
+workers of the local cluster never see Ctrl-C (the terminal sends it to every process of its
+group): this process alone handles it, and closes them.
 
 Without a scheduler address the study runs on a :class:`distributed.LocalCluster` of processes
 on this machine (one thread each, BLAS on one thread); with one (``tcp://host:8786``) it runs

@@ -198,8 +198,11 @@ def _check_paths(study, folder: str, tables: dict) -> None:
                            f"{v.path} is {leaf!r} in {file}, not a number to multiply",
                            "give absolute values (leave relative out)")
             continue
-        values = v.values if v.values else (0.0,)  # a grid or draws: numbers
-        for x in values:
+        if v.random and kind != "number":
+            raise _err(study.file, f"{where} distribution",
+                       f"draws numbers, but {v.path} is {_article(kind)} in {file} ({leaf!r})",
+                       f"list the {kind} values instead (values = [...])")
+        for x in v.values:
             given = _kind(x)
             fits = (given == kind or (kind in ("text", "table") and given in ("text", "table")))
             if not fits:
