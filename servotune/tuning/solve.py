@@ -1057,6 +1057,9 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     # 3. grid exchange (and the position-loop bandwidth ratio of the gates)
     ex = exchange_grids(problem, kernels, grids, gamma, phase.best, phase.solver, current_bw,
                         max_exchange, tolerance, callback)
+    if ex.failed:
+        ex = _repaired_exchange(problem, kernels, gamma, ex, current_bw, max_exchange,
+                                tolerance, callback)
     # 4. the optimiser's prediction and the independent check
     active = _active(problem, ex.design, ex.solver, ex.best)
     pred = predict(problem, ex.design, reference)
@@ -1082,6 +1085,73 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         stats=_statistics(n_starts, phase.polished, phase.iterations + ex.iterations,
                           ex.rounds, ex.grids, problem, ex.best.stats["return_status"],
                           current_bw, t_start))
+
+
+#: Largest number of repair steps of a design the exchange could not make feasible.
+REPAIR_STEPS = 12
+
+
+def repair(problem: TuningProblem, design: Design, current_bw: float | None):
+    """Return a design near ``design`` that meets every requirement in the dense check, or
+    None: the moves a commissioning engineer makes, one step per failed check (Ms of the
+    velocity loop or instability: Kp x 0.8; Ti below its bandwidth rule: Ti raised to it with
+    10 % to spare; the loop hierarchy or the position loop's Ms: Kv x 0.7), within the bounds
+    and the free variables, up to :data:`REPAIR_STEPS` times.
+
+    Parameters
+    ----------
+    problem : TuningProblem
+        The problem.
+    design : Design
+        Where to start (e.g. the exchange's last design).
+    current_bw : float or None
+        Current-loop bandwidth [rad/s].
+
+    Returns
+    -------
+    Design or None
+        The repaired design, or None when the steps do not reach one.
+    """
+    d = design
+    for _ in range(REPAIR_STEPS):
+        perf = verify(problem, d)
+        failed = [c for c in requirement_checks(problem, d, perf, current_bw) if not c.holds]
+        if perf.stable and not failed:
+            return d
+        change = {}
+        if not perf.stable or any(c.requirement == "Ms velocity loop" for c in failed):
+            change["kp"] = d.kp * 0.8
+        for c in failed:
+            if (c.requirement.startswith("Ti") and c.value is not None and c.limit
+                    and c.value < c.limit):
+                change["ti"] = d.ti * c.limit / c.value * 1.1
+            elif c.requirement in ("loop hierarchy", "Ms position loop"):
+                change["kv"] = d.kv * 0.7
+        change = {v: float(np.clip(x, *problem.bounds[v])) for v, x in change.items()
+                  if v in problem.free}
+        if not change or all(change[v] == getattr(d, v) for v in change):
+            return None
+        d = dataclasses.replace(d, **change)
+    return None
+
+
+def _repaired_exchange(problem, kernels, gamma, ex: ExchangeOutcome, current_bw,
+                       max_exchange, tolerance, callback) -> ExchangeOutcome:
+    """When the exchange could not make its design feasible at the frequencies it added: the
+    design repaired (:func:`repair`), solved again on the refined grids and exchanged from
+    there; the failed outcome stands when that does not succeed."""
+    start = repair(problem, ex.design, current_bw)
+    if start is None:
+        return ex
+    sol = ex.solver.solve(start, ex.grids.band_rows, ex.grids.loop_rows)
+    if not (sol.converged and all(model_stability(problem, sol.design))):
+        return ex
+    again = exchange_grids(problem, kernels, ex.grids, gamma, sol, ex.solver, current_bw,
+                           max_exchange, tolerance, callback)
+    if again.failed:
+        return ex
+    return dataclasses.replace(again, iterations=again.iterations + ex.iterations
+                               + sol.stats["iter_count"])
 
 
 def _exclusion_reason(model) -> str:
