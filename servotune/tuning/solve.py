@@ -60,7 +60,7 @@ FILTER_VARIABLES = NOTCH_VARIABLES + LOWPASS_VARIABLES
 __all__ = ["TuningResult", "TuningStatistics", "Prediction", "StartSet", "StartsOutcome",
            "HeldModel", "held_models",
            "ExchangeOutcome", "ClosedLoopMatrices", "stable_starts", "model_stability",
-           "solve_starts",
+           "solve_starts", "repair",
            "exchange_grids", "predict", "tune"]
 
 #: Softer velocity loops tried when the initial design leaves a model unstable.
