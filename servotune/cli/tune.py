@@ -95,9 +95,10 @@ def add_parser(subparsers) -> None:
                         "loop by the technical optimum, velocity PI by the symmetric optimum "
                         "reduced to the Ms limit, a notch, Kv from the hierarchy)")
     p.add_argument("--spread-from", type=Path, default=None, metavar="STUDY",
-                   help="results.parquet (or folder) of a friction-spread study (servotune "
-                        "study): its worst samples become further friction models of every "
-                        "regime, so the design is tuned for them too")
+                   help="a friction-spread study's folder (an interrupted one gives the samples "
+                        "it finished) or its results.parquet (servotune study): its worst "
+                        "samples become further friction models of every regime, so the design "
+                        "is tuned for them too")
     p.add_argument("--spread-samples", type=SPREAD_SAMPLES, default=4, metavar="N",
                    help="how many of the study's worst samples (1 to 20, default 4)")
     add_workers_option(p)
@@ -157,6 +158,7 @@ def run(args) -> int:
         from ..study.spread import spread_from_study
 
         samples = spread_from_study(args.spread_from, args.spread_samples)
+        spread_note = getattr(samples, "note", None)
         axis = dataclasses.replace(axis, tuning=dataclasses.replace(
             axis.tuning, friction_samples=samples))
     with progress.task(f"{axis.name}: model checks"):
@@ -164,6 +166,8 @@ def run(args) -> int:
     for text in checks.warnings:
         print(f"WARNING: {text}", file=sys.stderr)
     notes = []
+    if args.spread_from is not None and spread_note:
+        notes.append(spread_note)
     if axis.drive is None:
         notes.append("no [drive]: the structure with viscous guide-way pads alone is tuned "
                      "(C only, the paper's sec 4.1 analysis without control)")
