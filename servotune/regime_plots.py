@@ -233,6 +233,17 @@ def _evidence_label(e, claim) -> str:
             f"{e.resonance_hz:.1f} Hz, {why}")
 
 
+def _failure_without_a_point(r) -> str:
+    """Why a regime fails when no drawn point shows it: its unstable corners of the friction
+    spread (which have no response to draw), else the first of its reasons."""
+    unstable = [c.label for c in r.corners
+                if c.claimed_peak is not None and not math.isfinite(c.claimed_peak)]
+    if unstable:
+        return (f"the design is unstable at {len(unstable)} corner(s) of the friction spread "
+                f"({'; '.join(unstable)}), which have no response to draw")
+    return r.reason.split("; ")[0]
+
+
 #: how many points that break a claim the legend names one by one (the caption names all)
 EVIDENCE_IN_LEGEND = 3
 
@@ -330,7 +341,7 @@ def plot_regime_verification(regimes, linear=None, title: str | None = None,
         elif evidence:
             verdict = "does NOT hold: " + _evidence_label(evidence[0], claim)
         else:
-            verdict = "does NOT hold: " + r.reason
+            verdict = "does NOT hold: " + _failure_without_a_point(r)
         ax.set_title(_short(f"{r.name}: {verdict}", 120), fontsize=9,
                      color="k" if r.holds else "tab:red")
         ax.set_ylabel("|x/F| [m/N]")
@@ -350,7 +361,8 @@ def plot_regime_verification(regimes, linear=None, title: str | None = None,
             sentence += (f"The claim does NOT hold: {r.reason}."
                          + (" Red crosses: " + "; ".join(_evidence_label(e, claim)
                                                           for e in evidence) + "."
-                            if evidence else " No drawn point carries the failure."))
+                            if evidence else " No drawn point carries the failure: "
+                            + _failure_without_a_point(r) + "."))
         text.append(sentence)
     axes[-1].set_xlabel("excitation frequency [Hz] (dotted: the swept band)")
     if title:

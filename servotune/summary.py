@@ -268,7 +268,7 @@ def realised_notes(regimes, tolerance: float) -> tuple[str, ...]:
         imp = v.realised_improvement
         if v.holds or imp is None:
             continue
-        change = ("no change" if abs(imp - 1) < 0.005 else
+        change = ("unchanged" if abs(imp - 1) < 0.005 else
                   f"{1 - 1 / imp:.0%} lower" if imp > 1 else f"{1 / imp - 1:.0%} higher")
         after = (v.nonlinear_peak_after_nominal if v.nonlinear_peak_after_nominal is not None
                  else v.nonlinear_peak_after)

@@ -196,3 +196,23 @@ def test_realised_is_explained_beside_a_claim_that_does_not_hold(failing):
     # the same words in the text output and the HTML
     assert "realised 1.03x" in summary.text(table)
     assert "realised 1.03x" in summary.html_table(table)
+
+
+def test_a_failure_without_a_point_is_named_in_the_title(failing):
+    # a corner of the friction spread unstable with the design has no response to draw: the
+    # title and the caption name it instead of a point
+    from servotune.friction.lugre import BIANCHI2014
+    from servotune.verdict import CornerVerdict
+
+    regime = dataclasses.replace(
+        failing.verdict.regimes[0], harmonic=failing.verdict.regimes[0].harmonic[:1],
+        corners=(CornerVerdict("sigma0 x 3", BIANCHI2014, float("inf"), holds=False,
+                               reason="the linear model is unstable with the design"),),
+        reason="sigma0 x 3: the linear model is unstable with the design")
+    assert regime.evidence_against(0.3) == ()
+    fig = plots.plot_regime_verification([regime], tolerance=0.3)
+    title = fig.axes[0].get_title()
+    assert "does NOT hold: the design is unstable at 1 corner(s) of the friction spread" in title
+    assert not [ln for ln in fig.axes[0].get_lines() if ln.get_marker() == "X"]
+    assert "No drawn point carries the failure: the design is unstable at 1 corner(s)" in \
+        plots.figure_caption(fig)
