@@ -179,7 +179,7 @@ def test_the_command_writes_json_and_figures(tmp_path, capsys):
     folder = tmp_path / "out" / "identify_hammer"
     assert {p.name for p in folder.iterdir()} >= {"results.json", "frf_fit.png",
                                                    "stabilisation.png"}
-    assert "--axis" in out["not_done"]
+    assert "--kind" in out["not_done"] and "updated_axis" not in out
 
 
 @pytest.mark.parametrize("content, words", [

@@ -6,7 +6,11 @@ poles nearest to ``--modes-hz``), fits the residues by LSFD and reports how well
 reproduce the measurement (:mod:`servotune.measured.ema`). Figures: the measured against the
 synthesised FRFs, and the stabilisation diagram.
 
-Updating an axis description from the modes (``--axis``) is not done yet.
+With ``--axis`` the measurement is joined with the axis model (:mod:`servotune.measured.update`):
+the first FRF is the receptance at ``--dof`` with the drive switched off and the guide-way pads
+stuck (the axis' ``stiction`` contact); the natural frequencies and damping ratios of the stored
+modes that move the identified poles most are fitted to it within bounds, and a copy of the
+axis folder with the updated model is written (``updated_axis/``), the user's axis untouched.
 """
 
 from __future__ import annotations
@@ -27,6 +31,9 @@ from ._common import (
 __all__ = ["add_parser", "run"]
 
 FIGURES = ("frf_fit.png", "stabilisation.png")
+UPDATE_FIGURE = "model_update.png"
+UPDATED_AXIS = "updated_axis"
+NOT_DONE = "the drive's measured speed plant (--kind) is not in this version"
 _FREQUENCY = number(0.0, 1e6, low_open=True, example=120, unit="Hz")
 _ORDER = number(5, 200, integer=True, example=40)
 QUANTITIES = ("receptance", "mobility", "accelerance")
@@ -51,8 +58,15 @@ def add_parser(subparsers) -> None:
                     "outside the band's outer 3 %; such poles within 1 % are one mode. "
                     "--modes-hz picks the poles nearest to given frequencies instead. Writes "
                     "results.json, frf_fit.png (measured against synthesised) and "
-                    "stabilisation.png. Not yet: updating an axis description from the modes "
-                    "(--axis), and the drive's measured speed plant (--kind).")
+                    "stabilisation.png. With --axis, the axis' reduced model is updated to the "
+                    "measurement: the first FRF is the receptance at --dof with the drive off "
+                    "and the pads stuck (the stiction contact); the natural frequency (stiffness "
+                    "in the modal basis, shapes kept) and the damping ratio of the stored mode "
+                    "that moves each identified pole most are fitted by least squares on the "
+                    "log-magnitude and phase over the band (frequencies within +-20 %, damping "
+                    "ratios in [0.001, 0.2]); writes model_update.png and updated_axis/, a copy "
+                    "of the axis folder with the updated structure.npz and modal_damping. Not "
+                    "yet: the drive's measured speed plant (--kind).")
     p.add_argument("files", nargs="+", metavar="FRF_FILE",
                    help="CSV (f_hz with re,im or mag,phase_deg; '# quantity:' and '# units:' "
                         "comment lines) or UFF dataset 58 (.uff, .unv); several FRFs of one "
@@ -60,7 +74,14 @@ def add_parser(subparsers) -> None:
                         "residues are 'residue' (give the driving point first)")
     p.add_argument("--kind", choices=("structure",), default="structure",
                    help="what was measured: 'structure' (FRFs of the machine structure, e.g. "
-                        "hammer tests at the work piece; the only kind so far)")
+                        "hammer tests at the work piece, drive off, pads stuck; the only kind "
+                        "so far)")
+    p.add_argument("--axis", default=None, metavar="AXIS",
+                   help="axis folder to update to the measurement (the folder itself is never "
+                        "changed: the updated copy goes to DIR/identify_<name>/updated_axis)")
+    p.add_argument("--dof", default=None, metavar="DOF",
+                   help="the DOF of the measurement, force and response (default wp.x; only "
+                        "with --axis)")
     p.add_argument("--quantity", choices=QUANTITIES, default=None,
                    help="the quantity of files that do not state it (default receptance)")
     p.add_argument("--units", default=None, metavar="UNIT",
@@ -98,10 +119,20 @@ def run(args) -> int:
     if args.band_hz is not None and args.band_hz[0] >= args.band_hz[1]:
         raise UsageError(f"--band-hz {args.band_hz[0]:g} {args.band_hz[1]:g}: the low "
                          "frequency must be below the high one")
+    if args.dof is not None and args.axis is None:
+        raise UsageError(f"--dof {args.dof}: the DOF of the measurement serves the updating of "
+                         "an axis; give --axis AXIS too, or drop --dof")
     files = [Path(f) for f in args.files]
     names = [] if args.no_plots else list(FIGURES)
+    if args.axis is not None and not args.no_plots:
+        names.append(UPDATE_FIGURE)
+    written = [*names, UPDATED_AXIS] if args.axis is not None else names
     subject = files[0].stem + (f"+{len(files) - 1}" if len(files) > 1 else "")
-    out = RunOutput.for_args(args, "identify", subject, ["results.json", *names])
+    axis = None
+    if args.axis is not None:
+        with progress.task(f"loading {args.axis}"):
+            axis, contact, dof = _axis_and_contact(args)
+    out = RunOutput.for_args(args, "identify", subject, ["results.json", *written])
     with progress.task(f"reading {len(files)} file(s)"):
         from ..measured.ema import identify_modes
         from ..measured.frf import read_frfs
@@ -111,17 +142,33 @@ def run(args) -> int:
     wanted = None if args.modes_hz is None else [f * RAD_S_PER_HZ for f in args.modes_hz]
     with progress.task(f"identifying modes of {len(frfs)} FRF(s)"):
         fit = identify_modes(frfs, band=band, max_order=args.max_order, frequencies=wanted)
+    update = None
+    if axis is not None:
+        from ..measured.update import update_model
+
+        with progress.task(f"updating {axis.name} to the measurement at {dof}"):
+            update = update_model(axis.structure, fit, contact, axis.pads, dof)
     result = {"command": "identify", "kind": args.kind, "files": [str(f) for f in files],
               **fit.to_dict(), "folder": str(out.path),
-              "figures": [str(out.file(n)) for n in names],
-              "not_done": "updating an axis description from the modes (--axis) is not in "
-                          "this version"}
+              "figures": [str(out.file(n)) for n in names], "not_done": NOT_DONE}
+    if update is not None:
+        result.update({"axis": str(args.axis), "updated_axis": str(out.file(UPDATED_AXIS)),
+                       **update.to_dict()})
+        result["warnings"] = [*result["warnings"], *update.warnings]
+        result["notes"] = [*result["notes"], *update.notes]
     with progress.task(f"writing {out.path}"), out.writing() as folder:
+        if update is not None:
+            from ..measured.update import write_updated_axis
+
+            write_updated_axis(axis, update, folder / UPDATED_AXIS,
+                               source=", ".join(f.name for f in files))
         if names:
-            save_figure(fit.plot_fit(), folder / names[0])
-            save_figure(fit.plot_stabilisation(), folder / names[1])
+            save_figure(fit.plot_fit(), folder / FIGURES[0])
+            save_figure(fit.plot_stabilisation(), folder / FIGURES[1])
+            if update is not None:
+                save_figure(update.plot(), folder / UPDATE_FIGURE)
         write_results(folder, result)
-    for text in fit.warnings:
+    for text in (*fit.warnings, *(update.warnings if update is not None else ())):
         print(f"WARNING: {text}", file=sys.stderr)
     if args.json:
         print_json(result)
@@ -141,6 +188,50 @@ def run(args) -> int:
         print(f"  default taken: {note}")
     for note in fit.notes:
         print(f"  note: {note}")
-    print("  not done: updating an axis description from the modes (--axis)")
+    if update is not None:
+        _print_update(update, axis, out.file(UPDATED_AXIS))
+    print(f"  not done: {NOT_DONE}")
     print(f"  wrote {out.path}")
     return 0
+
+
+def _axis_and_contact(args):
+    """The axis, its stiction contact (the pads stuck) and the measured DOF; clear errors."""
+    from ..analysis import axis_contact
+    from ..axis import load_axis
+    from ..structure.model import UnknownDofError
+    from ._common import CliError, require_section
+
+    axis = load_axis(args.axis)
+    require_section(axis, "friction", "[friction]", "servotune identify --axis",
+                    ": the pads, stuck during the test, sit on its stiction contact")
+    dof = args.dof or "wp.x"
+    try:
+        axis.structure.index(dof)
+    except UnknownDofError as exc:
+        raise CliError(f"--dof {dof}: {exc}") from None
+    return axis, axis_contact(axis, "stiction"), dof
+
+
+def _print_update(update, axis, folder) -> None:
+    """The updating's lines of the text output."""
+    from ..units import HZ_PER_RAD_S
+
+    print(f"  updating {axis.name} to the {update.quantity} at {update.dof} (drive off, pads: "
+          f"{update.contact.note}):")
+    print("    identified          model before        model after     | stored mode  "
+          "f [Hz] before -> after   zeta [%] before -> after   share")
+    for p in update.parameters:
+        d = p.to_dict()
+        i, b, a = d["identified"], d["model_before"], d["model_after"]
+        print(f"    {i['frequency_hz']:8.3f} Hz {100 * i['damping_ratio']:5.2f} %  "
+              f"{b['frequency_hz']:8.3f} Hz {100 * b['damping_ratio']:5.2f} %  "
+              f"{a['frequency_hz']:8.3f} Hz {100 * a['damping_ratio']:5.2f} % | {p.mode + 1:5d}  "
+              f"{p.frequency_before * HZ_PER_RAD_S:9.3f} -> {p.frequency_after * HZ_PER_RAD_S:9.3f}"
+              f"   {100 * p.damping_before:7.3f} -> {100 * p.damping_after:7.3f}    "
+              f"{p.match.share:5.2f}")
+    print(f"  FRF error (relative RMS over the band): before {100 * update.frf_error_before:.2f} "
+          f"%, after {100 * update.frf_error_after:.2f} %")
+    for note in update.notes:
+        print(f"  note: {note}")
+    print(f"  updated axis: {folder} (every command takes it; {axis.path} is unchanged)")

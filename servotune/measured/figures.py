@@ -1,7 +1,9 @@
-"""Figures of a modal identification: the FRF fit and the stabilisation diagram.
+"""Figures of a modal identification (the FRF fit, the stabilisation diagram) and of a model
+update.
 
 SI values come in; Hz and degrees appear only on the axes. Each function draws a
-:class:`~servotune.measured.ema.ModalIdentification` without computing anything, and returns a
+:class:`~servotune.measured.ema.ModalIdentification` or a
+:class:`~servotune.measured.update.ModelUpdate` without computing anything, and returns a
 :class:`matplotlib.figure.Figure` built without pyplot.
 """
 
@@ -13,7 +15,7 @@ from matplotlib.figure import Figure
 from ..plots import set_caption
 from ..units import HZ_PER_RAD_S
 
-__all__ = ["plot_frf_fit", "plot_stabilisation"]
+__all__ = ["plot_frf_fit", "plot_model_update", "plot_stabilisation"]
 
 #: how each status of the stabilisation diagram is drawn: marker, colour, label
 _STATUS_STYLE = {
@@ -113,3 +115,50 @@ def plot_stabilisation(result) -> Figure:
                  f"{100 * rule.damping_tolerance:g} % in damping of the order below")
     return set_caption(fig, "Poles of every model order by their stability against the order "
                             "below; the chosen poles circled (" + rule.describe() + ")")
+
+
+def plot_model_update(update) -> Figure:
+    """Plot the measured FRF and the model's before and after updating (magnitude and phase).
+
+    Parameters
+    ----------
+    update : servotune.measured.update.ModelUpdate
+        The update.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Magnitude (log) above the phase over the band: the measurement (solid, light), the
+        model before (dotted) and after (dashed); the updated poles' frequencies as vertical
+        lines.
+    """
+    fig = Figure(figsize=(8, 6.5), layout="constrained")
+    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+    f = update.omega * HZ_PER_RAD_S
+    curves = ((update.measured, "-", "0.2", 2.5, 0.45, "measured"),
+              (update.before, ":", "tab:red", 1.6, 1.0,
+               f"model before ({100 * update.frf_error_before:.1f} % RMS)"),
+              (update.after, "--", "tab:blue", 1.4, 1.0,
+               f"model after ({100 * update.frf_error_after:.1f} % RMS)"))
+    for values, style, colour, width, alpha, label in curves:
+        ax_mag.semilogy(f, np.abs(values), style, color=colour, lw=width, alpha=alpha,
+                        label=label)
+        ax_ph.plot(f, np.rad2deg(np.angle(values)), style, color=colour, lw=width, alpha=alpha)
+    for p in update.parameters:
+        for ax in (ax_mag, ax_ph):
+            ax.axvline(abs(p.pole_after) * HZ_PER_RAD_S, color="0.5", ls=":", lw=0.8)
+    unit = {"receptance": "m/N", "mobility": "m/s/N", "accelerance": "m/s^2/N"}[update.quantity]
+    ax_mag.set_ylabel(f"|H| at {update.dof} [{unit}]")
+    ax_ph.set_ylabel("phase [deg]")
+    ax_ph.set_yticks([-180, -90, 0, 90, 180])
+    ax_ph.set_xlabel("frequency [Hz]")
+    changed = ", ".join(f"mode {p.mode + 1}: {p.frequency_before * HZ_PER_RAD_S:.1f} -> "
+                        f"{p.frequency_after * HZ_PER_RAD_S:.1f} Hz" for p in update.parameters)
+    ax_mag.set_title(f"Model updating: {changed}", fontsize="medium")
+    ax_mag.legend(fontsize="small")
+    for ax in (ax_mag, ax_ph):
+        ax.grid(True, which="both", alpha=0.3)
+    return set_caption(fig, f"The measured {update.quantity} at {update.dof} (drive off, pads "
+                            f"on the {update.contact.kind} contact) against the model before "
+                            "and after updating the stored modes' frequencies and damping "
+                            "ratios; the updated poles dotted")
