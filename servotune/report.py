@@ -358,11 +358,16 @@ def tuning_figures(job) -> list[tuple[str, str, object]]:
             lobes, required_depth=depth, labels=labels, depth_max=4 * lobes[0].b_crit,
             title=f"{name}: stability lobes (zero-order) of the worst regime model"
                   + (f" after: {worst}" if worst else ""))
-        if worst:
-            plots.set_caption(fig, plots.figure_caption(fig) + f" The worst regime model "
-                              f"(largest compliance peak) of the tuned design: {worst}; "
-                              "before, that of the design before.")
-        out.append(("lobes.png", "Stability lobes before and after", fig))
+        worst_before = (r.before.worst_model.model.name if job.lobes_before is not None
+                        and r.before.worst_model is not None else None)
+        which = [f"{tag}: {model}" for tag, model in (("after", worst if job.lobes_after
+                                                               is not None else None),
+                                                      ("before", worst_before)) if model]
+        if which:
+            plots.set_caption(fig, plots.figure_caption(fig) + " Each design's lobes are of "
+                              "its worst regime model (largest compliance peak): "
+                              + "; ".join(which) + ".")
+        out.append(("lobes.png", "Stability lobes, " + " and ".join(labels), fig))
     if job.mode_peaks is not None:
         bounds = getattr(r.problem, "bounds", {}).get("c")
         out.append(("modes.png", "Several modes, one C (paper sec 5.2)",
