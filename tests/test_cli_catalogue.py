@@ -266,6 +266,14 @@ CASES = [
     ("identify-band-reversed", lambda t, s: ["identify", frf_csv(
         t, "f_hz,re,im\n10,1e-6,0\n20,1e-6,0\n"), "--band-hz", "300", "20"], 2,
      "--band-hz 300 20"),
+    ("identify-dof-without-axis", lambda t, s: ["identify", frf_csv(
+        t, "f_hz,re,im\n10,1e-6,0\n20,1e-6,0\n"), "--dof", "wp.y"], 2, "--dof wp.y"),
+    ("identify-axis-without-friction", lambda t, s: ["identify", frf_csv(
+        t, "f_hz,re,im\n10,1e-6,0\n20,1e-6,0\n"), "--axis", axis(t, s, drop=["friction"])],
+     1, "[friction]"),
+    ("identify-axis-unknown-dof", lambda t, s: ["identify", frf_csv(
+        t, "f_hz,re,im\n10,1e-6,0\n20,1e-6,0\n"), "--axis", axis(t, s), "--dof", "wp.q"],
+     1, "--dof wp.q: unknown DOF 'wp.q'"),
 
     # ---- structure files (`check`)
     ("check-missing-file", lambda t, s: ["check", str(t / "M.mtx"), str(t / "K.mtx")], 1,
