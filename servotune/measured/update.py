@@ -4,7 +4,7 @@ The problem: a receptance H(w) measured at one DOF of the axis in a known test c
 (the drive switched off, the guide-way pads stuck: the structure with the pads' presliding
 contact and no motor torque) and the reduced model's prediction of it, G(w; p), differ. Find
 the natural frequencies and modal damping ratios p of a few modes of the stored model (the
-:class:`~servotune.structure.ModalModel` of ``[structure]``, pads and rotor free) that make
+:class:`~servotune.structure.ModalModel` of ``[structure]``, pads and rotor free) that solve::
 
     minimise over p   sum_k |ln G(w_k; p) - ln H(w_k)|^2     over the lines w_k of the band
     subject to        (1 - b) omega_j <= omega_j' <= (1 + b) omega_j,
@@ -16,10 +16,10 @@ zeta in [0.001, 0.2] by default (:class:`UpdateBounds`).
 
 The stages, each a named function:
 
-1. :func:`test_configuration`: the model of the test set-up, the structure with the contact's
-   springs and dampers shared at the pads, and :func:`configuration_modes`: its complex modes,
-   each with its residue at the DOF and the sensitivity of its pole to every stored mode's
-   frequency.
+1. :func:`measured_configuration`: the model of the test set-up, the structure with the
+   contact's springs and dampers shared at the pads, and :func:`configuration_modes`: its
+   complex modes, each with its residue at the DOF and the sensitivity of its pole to every
+   stored mode's frequency [3]_.
 2. :func:`match_modes`: each identified mode to the configuration mode nearest in frequency
    among those that show at the DOF, and that mode to the stored mode whose frequency moves its
    pole most. With one measured DOF there is no mode shape to compare: the modal assurance
@@ -74,7 +74,7 @@ __all__ = [
     "ModeUpdate",
     "ModelUpdate",
     "updated_structure",
-    "test_configuration",
+    "measured_configuration",
     "configuration_modes",
     "predicted_frf",
     "match_modes",
@@ -205,7 +205,7 @@ def updated_structure(structure: ModalModel, modes, omega, zeta) -> ModalModel:
     return ModalModel(m, 0.5 * (k + k.T), structure.dofs, damping_ratio=ratios[order])
 
 
-def test_configuration(structure: ModalModel, contact, pads) -> ModalModel:
+def measured_configuration(structure: ModalModel, contact, pads) -> ModalModel:
     """Return the structure in a test set-up: the contact at the pads, no drive.
 
     Parameters
@@ -285,7 +285,7 @@ def configuration_modes(structure: ModalModel, configuration: ModalModel,
     structure : ModalModel
         The stored model (whose modes are the parameters).
     configuration : ModalModel
-        The test configuration (:func:`test_configuration`), on the same DOFs or some held.
+        The test configuration (:func:`measured_configuration`), on the same DOFs or some held.
     dof : str
         The measured DOF (force and response).
 
@@ -406,7 +406,7 @@ def match_modes(structure: ModalModel, modes: ConfigurationModes, identified,
     Notes
     -----
     The rule: an identified mode goes with the configuration mode nearest in frequency among
-    those that show at the DOF (their own peak at least :data:`VISIBLE` of the model's |G|
+    those that show at the DOF (their own peak at least ``VISIBLE`` = 0.2 of the model's |G|
     there); that mode with the stored flexible mode of the largest sensitivity not taken yet.
     No MAC: one measured DOF has no shape to compare.
     """
@@ -665,7 +665,7 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     quantity = identification.frfs[0].quantity
     omega = np.asarray(identification.omega, float)
     measured = np.asarray(identification.measured[0], complex)
-    configuration = test_configuration(structure, contact, pads)
+    configuration = measured_configuration(structure, contact, pads)
     modes = configuration_modes(structure, configuration, dof)
     matches, notes = match_modes(structure, modes, identification.modes, bounds)
     if not matches:
@@ -705,7 +705,7 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     updated = model_of(fit.x)
     before = predicted_frf(structure, omega, contact, pads, dof, quantity)
     after = predicted_frf(updated, omega, contact, pads, dof, quantity)
-    after_modes = configuration_modes(updated, test_configuration(updated, contact, pads), dof)
+    after_modes = configuration_modes(updated, measured_configuration(updated, contact, pads), dof)
     warnings = []
     parameters = []
     for k, m in enumerate(matches):
