@@ -204,3 +204,32 @@ def test_the_starter_axis_updated_into_its_own_folder(tmp_path, capsys):
     assert not (updated / "results").exists()
     assert load_axis(updated).name == "starter_updated"
     assert {k: v for k, v in digest(folder).items() if not k.startswith("results/")} == before
+
+
+@pytest.mark.parametrize("axis_lines, name_line", [
+    ('[axis]   # header\nname = "mill"  # the name\ndescription = "d"\n',
+     'name = "mill_updated"  # the name'),
+    ('[axis]\ndescription = "d"\n', 'name = "mill_updated"'),
+    ("", 'name = "mill_updated"'),
+])
+def test_the_axis_file_keeps_everything_but_structure_and_name(axis_lines, name_line):
+    """[structure] with FE matrices, a reduce sub-table and ports: replaced in place by the
+    updated one; the other tables (an array of tables too) and their comments unchanged."""
+    import tomllib
+
+    from servotune.measured.update import _updated_toml
+
+    rest = ('[friction]   # pads\npads = ["pad1.x"]\n\n[[extra]]\nx = 1\n\n'
+            '[requirements]\nband_hz = [5.0, 300.0]\n')
+    text = (axis_lines + '\n[structure]\nmass = "M.mtx"\nstiffness = "K.mtx"\n'
+            'modal_damping = [0.02,\n   0.03]\n[structure.reduce]\nboundary = ["wp.x"]\n'
+            'n_modes = 3\n[structure.ports]\n"wp.x" = { node = 1, direction = "x" }\n\n'
+            + rest)
+    block = '[structure]\nfile = "structure.npz"\nmodal_damping = [0.01, 0.02]\n\n'
+    out = _updated_toml(text, block, "mill_updated")
+    parsed, before = tomllib.loads(out), tomllib.loads(text)
+    assert parsed["structure"] == {"file": "structure.npz", "modal_damping": [0.01, 0.02]}
+    assert parsed["axis"] == dict(before.get("axis", {}), name="mill_updated")
+    assert {k: v for k, v in parsed.items() if k not in ("axis", "structure")} == {
+        k: v for k, v in before.items() if k not in ("axis", "structure")}
+    assert out.endswith(rest) and name_line in out.splitlines()

@@ -66,6 +66,7 @@ import scipy.linalg
 
 from ..structure.model import ModalModel
 from ..units import HZ_PER_RAD_S
+from .ema import IdentifiedMode
 
 __all__ = [
     "UpdateBounds",
@@ -375,7 +376,7 @@ class ModeMatch:
         |d ln lambda / d ln omega_mode|: how much of the pole's frequency that mode's is.
     """
 
-    identified: object
+    identified: IdentifiedMode
     pole: complex
     mode: int
     share: float
@@ -665,6 +666,7 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     quantity = identification.frfs[0].quantity
     omega = np.asarray(identification.omega, float)
     measured = np.asarray(identification.measured[0], complex)
+    lines = np.abs(measured) > 0  # the log needs them; a line of exactly 0 carries nothing
     configuration = measured_configuration(structure, contact, pads)
     modes = configuration_modes(structure, configuration, dof)
     matches, notes = match_modes(structure, modes, identification.modes, bounds)
@@ -688,14 +690,14 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     upper = np.concatenate([np.full(len(chosen), span[0]),
                             np.full(len(chosen), math.log(high_z))])
     x0 = np.clip(x0, lower + 1e-9, upper - 1e-9)
-    log_h = np.log(measured)
+    log_h = np.log(measured[lines])
     n = len(chosen)
 
     def model_of(x):
         return updated_structure(structure, chosen, w0 * np.exp(x[:n]), np.exp(x[n:]))
 
     def residuals(x):
-        g = predicted_frf(model_of(x), omega, contact, pads, dof, quantity)
+        g = predicted_frf(model_of(x), omega[lines], contact, pads, dof, quantity)
         r = np.log(g) - log_h
         r.imag = np.angle(np.exp(1j * r.imag))
         return np.concatenate([r.real, r.imag])
@@ -719,7 +721,9 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
             warnings.append(f"mode {m.mode + 1}: the {' and '.join(edge)} ended on its bound "
                             f"({bounds.describe()}): the model may lack what the measurement "
                             "shows (another mode, the contact's stiffness)")
-        r = int(np.argmin(np.abs(after_modes.poles - m.identified.pole)))
+        seen = np.flatnonzero(after_modes.visible >= VISIBLE)
+        seen = seen if seen.size else np.arange(after_modes.poles.size)
+        r = int(seen[np.argmin(np.abs(after_modes.poles[seen] - m.identified.pole))])
         parameters.append(ModeUpdate(m.mode, float(w0[k]), w_new, float(z0[k]), z_new, m,
                                      complex(after_modes.poles[r]), tuple(edge)))
     error_before, error_after = _error(before, measured), _error(after, measured)
@@ -740,28 +744,37 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
 
 
 _HEADER = re.compile(r"^\s*\[\s*([^\[\]]+?)\s*\]\s*(#.*)?$")
+_NAME = re.compile(r"^(\s*name\s*=\s*)(\"(?:[^\"\\]|\\.)*\"|'[^']*')")
 
 
-def _replace_tables(text: str, new: dict[str, str]) -> str:
-    """``text`` with the tables named in ``new`` (and their sub-tables) replaced by the text
-    given, at the place of the first."""
-    out, skipping, placed = [], None, set()
+def _updated_toml(text: str, block: str, name: str) -> str:
+    """``text`` with ``[structure]`` and its sub-tables replaced by ``block`` (at its place)
+    and the ``name`` of ``[axis]`` set (a line added when it has none)."""
+    axis = tomllib.loads(text).get("axis")
+    out, table, placed = [], None, False
+    named = axis is not None and "name" not in axis  # a line to add after the header
     for line in text.splitlines(keepends=True):
+        stripped = line.lstrip()
         header = _HEADER.match(line)
-        if header and not line.lstrip().startswith("[["):
-            name = header.group(1).replace('"', "").replace(" ", "")
-            top = name.split(".")[0]
-            skipping = top if top in new else None
-            if skipping and top not in placed:
-                out.append(new[top])
-                placed.add(top)
+        if stripped.startswith("[["):
+            table = "[["
         elif header:
-            skipping = None
-        if skipping is None:
-            out.append(line)
-    for top, block in new.items():
-        if top not in placed:
-            out.append("\n" + block)
+            table = header.group(1).replace('"', "").replace(" ", "")
+            if table.split(".")[0] == "structure" and not placed:
+                out.append(block)
+                placed = True
+        if table is not None and table.split(".")[0] == "structure":
+            continue
+        if table == "axis" and _NAME.match(line):
+            line = _NAME.sub(lambda m: m.group(1) + _toml_value(name), line, count=1)
+        out.append(line)
+        if header and table == "axis" and named:
+            out.append(f"name = {_toml_value(name)}\n")
+            named = False
+    if not placed:
+        out.append("\n" + block)
+    if axis is None:
+        out.insert(0, f"[axis]\nname = {_toml_value(name)}\n\n")
     return "".join(out)
 
 
@@ -775,7 +788,7 @@ def write_updated_axis(axis, update: ModelUpdate, folder, source: str = "") -> P
     update : ModelUpdate
         The update.
     folder : path-like
-        The new axis folder; it must not exist (nor be the axis' own).
+        The new axis folder; it must not exist.
     source : str
         What the update was fitted to, for the comment in ``axis.toml``.
 
@@ -784,7 +797,8 @@ def write_updated_axis(axis, update: ModelUpdate, folder, source: str = "") -> P
     pathlib.Path
         The folder: every file of the axis folder, ``structure.npz`` with the updated M, K and
         DOF names, and ``axis.toml`` whose ``[structure]`` names it with the updated
-        ``modal_damping`` list and whose ``[axis] name`` ends in ``_updated``.
+        ``modal_damping`` list and whose ``[axis] name`` ends in ``_updated`` (the rest of
+        the file as it was).
 
     Raises
     ------
@@ -792,30 +806,16 @@ def write_updated_axis(axis, update: ModelUpdate, folder, source: str = "") -> P
         When ``folder`` exists.
     ValueError
         When the axis file's ``[structure]`` cannot be replaced cleanly (keys given elsewhere
-        as dotted keys).
+        as dotted keys); nothing is written then.
     """
     from ..structure.io import write_npz
 
     folder = Path(folder)
-    here = Path(axis.path).resolve()
     if folder.exists():
         raise FileExistsError(f"{folder} exists; the updated axis goes into a new folder")
-    target = folder.resolve()
-
-    def ignore(directory, names):
-        skip = {name for name in names if name == "__pycache__"}
-        for name in names:
-            path = (Path(directory) / name).resolve()
-            if path == target or path in target.parents:
-                skip.add(name)  # the results folder inside the axis folder
-        return skip
-
-    shutil.copytree(here, folder, ignore=ignore)
     original = Path(axis.file).read_text()
     tables = tomllib.loads(original)
     structure = update.structure
-    write_npz(folder / "structure.npz", structure.mass, structure.stiffness, structure.dofs,
-              force=True)
     changed = ", ".join(f"mode {p.mode + 1} {p.frequency_before * HZ_PER_RAD_S:.4g} -> "
                         f"{p.frequency_after * HZ_PER_RAD_S:.4g} Hz" for p in update.parameters)
     damping = ",\n    ".join(", ".join(f"{z:.6g}" for z in update.modal_damping[i:i + 8])
@@ -826,25 +826,33 @@ def write_updated_axis(axis, update: ModelUpdate, folder, source: str = "") -> P
              'file = "structure.npz"            # M and the DOFs as before, K updated\n'
              f"modal_damping = [                 # one per mode, ascending frequency\n"
              f"    {damping},\n]\n\n")
-    name = str(tables.get("axis", {}).get("name", Path(axis.path).name))
-    new = {"structure": block}
-    if "axis" in tables:
-        axis_table = dict(tables["axis"], name=f"{name}_updated")
-        lines = ["[axis]\n"] + [f"{key} = {_toml_value(value)}\n"
-                                for key, value in axis_table.items()]
-        new["axis"] = "".join(lines) + "\n"
-    text = _replace_tables(original, new)
+    name = f"{tables.get('axis', {}).get('name', Path(axis.path).name)}_updated"
+    text = _updated_toml(original, block, name)
     try:
         parsed = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{axis.file}: the updated [structure] cannot be written into a copy "
                          f"of it ({exc}); write [structure] as one table") from None
-    expected = {key: value for key, value in tables.items() if key not in ("structure", "axis")}
-    got = {key: value for key, value in parsed.items() if key not in ("structure", "axis")}
-    if got != expected or set(parsed["structure"]) != {"file", "modal_damping"}:
+    expected = {key: value for key, value in tables.items() if key != "structure"}
+    expected["axis"] = dict(expected.get("axis", {}), name=name)
+    got = {key: value for key, value in parsed.items() if key != "structure"}
+    if got != expected or set(parsed.get("structure", {})) != {"file", "modal_damping"}:
         raise ValueError(f"{axis.file}: the updated [structure] cannot be written into a copy "
                          "of it cleanly; write [structure] as one table (no dotted "
                          "structure.* keys elsewhere)")
+    target = folder.resolve()
+
+    def ignore(directory, names):
+        skip = {name for name in names if name == "__pycache__"}
+        for name in names:
+            path = (Path(directory) / name).resolve()
+            if path == target or path in target.parents:
+                skip.add(name)  # a results folder inside the axis folder
+        return skip
+
+    shutil.copytree(Path(axis.path), folder, ignore=ignore)
+    write_npz(folder / "structure.npz", structure.mass, structure.stiffness, structure.dofs,
+              force=True)
     (folder / "axis.toml").write_text(text)
     return folder
 
