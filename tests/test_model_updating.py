@@ -233,3 +233,34 @@ def test_the_axis_file_keeps_everything_but_structure_and_name(axis_lines, name_
     assert {k: v for k, v in parsed.items() if k not in ("axis", "structure")} == {
         k: v for k, v in before.items() if k not in ("axis", "structure")}
     assert out.endswith(rest) and name_line in out.splitlines()
+
+
+def test_a_measured_mobility_updates_the_same_model(tmp_path):
+    """A velocity pick-up: the mobility j w H, the model's receptance turned into it."""
+    from servotune.measured import MeasuredFrf, identify_modes, update_model
+    from servotune.template import write_template
+
+    write_template(tmp_path / "starter", name="starter")
+    axis = load_axis(tmp_path / "starter")
+    s = axis.structure
+    w2, phi = scipy.linalg.eigh(s.stiffness, s.mass)
+    w = np.sqrt(np.clip(w2, 0.0, None))
+    w[w2 < 1e-9 * w2.max()] = 0.0
+    j = 2
+    mphi = s.mass @ phi[:, j]
+    k = s.stiffness - 0.04 * w2[j] * np.outer(mphi, mphi)
+    w[j] *= np.sqrt(0.96)
+    d = s.mass @ phi @ np.diag(2 * 0.03 * w) @ phi.T @ s.mass
+    omega = 2 * np.pi * F_HZ
+    h = 1j * omega * stiction_receptance(axis, s.mass, k, d)
+    rng = np.random.default_rng(3)
+    h = h + 0.01 * np.abs(h) * (rng.standard_normal(h.size)
+                                + 1j * rng.standard_normal(h.size)) / np.sqrt(2)
+    frf = MeasuredFrf(omega, h, "mobility", "velocity pick-up", tmp_path / "v.csv")
+    fit = identify_modes([frf], band=(2 * np.pi * 5, 2 * np.pi * 390))
+    update = update_model(s, fit, axis_contact(axis, "stiction"), axis.pads)
+    (p,) = update.parameters
+    assert p.mode == j
+    assert p.frequency_after == pytest.approx(w[j], rel=0.005)
+    assert p.damping_after == pytest.approx(0.03, rel=0.10)
+    assert update.quantity == "mobility" and update.frf_error_after < 0.05
