@@ -78,7 +78,8 @@ def add_parser(subparsers) -> None:
                         "so far)")
     p.add_argument("--axis", default=None, metavar="AXIS",
                    help="axis folder to update to the measurement (the folder itself is never "
-                        "changed: the updated copy goes to DIR/identify_<name>/updated_axis)")
+                        "changed: the updated copy goes to "
+                        "DIR/identify_<first file's name>/updated_axis)")
     p.add_argument("--dof", default=None, metavar="DOF",
                    help="the DOF of the measurement, force and response (default wp.x; only "
                         "with --axis)")
@@ -152,10 +153,12 @@ def run(args) -> int:
               **fit.to_dict(), "folder": str(out.path),
               "figures": [str(out.file(n)) for n in names], "not_done": NOT_DONE}
     if update is not None:
+        extra = update.to_dict()
+        notes, warnings = extra.pop("notes"), extra.pop("warnings")
         result.update({"axis": str(args.axis), "updated_axis": str(out.file(UPDATED_AXIS)),
-                       **update.to_dict()})
-        result["warnings"] = [*result["warnings"], *update.warnings]
-        result["notes"] = [*result["notes"], *update.notes]
+                       **extra})
+        result["warnings"] = [*result["warnings"], *warnings]
+        result["notes"] = [*result["notes"], *notes]
     with progress.task(f"writing {out.path}"), out.writing() as folder:
         if update is not None:
             from ..measured.update import write_updated_axis
