@@ -31,7 +31,8 @@ SUMMARIES = {
     "init": "write a commented starter axis description (axis.toml + structure.npz)",
     "twomass": "fixed points, Copt and g(alpha) of the two-mass layouts (Fig 4, 5)",
     "modes": "natural frequencies and each mode's share of work-piece X motion",
-    "identify": "natural frequencies, damping ratios and residues from measured FRFs (LSCF/LSFD)",
+    "identify": "modes from measured FRFs (LSCF/LSFD); with --axis, the axis model updated to "
+                "them",
     "check": "check mass/stiffness matrices (symmetry, definiteness, rigid-body mass, "
              "fixed-base frequencies, modal effective mass) and a reduction against the full "
              "model",

@@ -49,7 +49,8 @@ def add_parser(subparsers) -> None:
     """
     p = subparsers.add_parser(
         "identify",
-        help="natural frequencies, damping ratios and residues from measured FRFs (LSCF/LSFD)",
+        help="modes from measured FRFs (LSCF/LSFD); with --axis, the axis model updated to "
+             "them",
         description="Modal identification of measured FRFs (impact-hammer receptances at the "
                     "work piece): poles by LSCF at model orders 2..2N, residues by LSFD with "
                     "lower and upper residual terms (sdypy-EMA). A pole is physical when it "

@@ -238,7 +238,9 @@ def run(args) -> int:
               f"tuned {t.c_opt_tuned:.6e} N s/m (relative difference "
               f"{t.c_relative_difference:+.1e}); peak g(alpha)/K {t.peak_analytic:.6e} m/N, "
               f"tuned {t.peak_tuned:.6e} m/N ({t.peak_relative_difference:+.1e})")
-    print(f"{axis.name}: {head.split(':')[0]} (the verdict above)")
+    label = ("VERIFIED" if job.verified else "NOT VERIFIED (linear check only)"
+             if job.status == "linear only" else "NOT VERIFIED")
+    print(f"{axis.name}: {label} (the verdict above)")
     print(f"  wrote {out.path} (results.json, {len(results['files'])} figures, report.html)")
     print(f"  report: {out.file('report.html')}")
     return status

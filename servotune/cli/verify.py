@@ -275,7 +275,8 @@ def run(args) -> int:
     with output.writing() as folder:
         if not args.no_plots:
             save_figure(plots.plot_regime_verification(
-                verdict.regimes, title=f"{axis.name}: LuGre time simulation of the design"),
+                verdict.regimes, tolerance=verdict.tolerance,
+                title=f"{axis.name}: LuGre time simulation of the design"),
                 folder / "nonlinear.png")
         write_results(folder, out)
     status = 0 if verdict.verified else 1
