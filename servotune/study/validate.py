@@ -17,6 +17,9 @@ import re
 import tomllib
 from pathlib import Path
 
+from ._tables import StudyFormatError, apply_values
+from ._tables import study_error as _err
+
 __all__ = ["read_axis_tables", "check_study", "MAX_BUILDS"]
 
 #: at most this many samples' axes are built to check a study (a few ms each)
@@ -60,7 +63,6 @@ def read_axis_tables(folder, study_file) -> dict:
         An axis file that cannot be read or is not valid TOML: names the file, the line and
         column, and the study that uses it.
     """
-    from .spec import StudyFormatError
 
     file = Path(folder) / "axis.toml"
     try:
@@ -152,7 +154,6 @@ def _there(tables: dict, path: str) -> bool:
 def _build(tables: dict, file: Path, values, relative) -> str | None:
     """The loader's reason for refusing a sample's axis, or None when it builds."""
     from ..axis import axis_from_tables
-    from .spec import apply_values
 
     try:
         axis_from_tables(apply_values(tables, values, relative), file)
@@ -163,7 +164,6 @@ def _build(tables: dict, file: Path, values, relative) -> str | None:
 
 
 def _check_paths(study, folder: str, tables: dict) -> None:
-    from .spec import _err
 
     file = Path(folder) / "axis.toml"
     for v in study.variations:
@@ -247,7 +247,6 @@ def check_study(study, tables: dict) -> None:
     are all good costs a few axis builds (milliseconds each for a reduced model); at most
     :data:`MAX_BUILDS` (a value not yet judged then is judged by its sample's run).
     """
-    from .spec import _err
 
     for folder in study.axes:
         _check_paths(study, folder, tables[folder])
