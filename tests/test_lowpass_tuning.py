@@ -182,3 +182,39 @@ def test_a_low_pass_held_where_it_costs_is_tuned_around(lowpass_tunes):
                        free.pads)
     assert axis.is_stable() and axis.analyse_loop("velocity").ms <= 1.6 * (1 + 1e-3)
     assert tuned.after.peak_compliance < held.after.peak_compliance
+
+
+def test_a_results_file_with_a_tuned_low_pass_is_checked_with_it(tmp_path):
+    """``servotune verify`` reads the tuned low-pass back from results.json and checks the
+    design with it: the starter axis with a low-pass at 800 Hz, a design whose corner moved to
+    1200 Hz; the drive it checks has the 1200 Hz low-pass (not the axis' 800 Hz) and the
+    dense check runs on it."""
+    import json
+
+    from servotune.axis import load_axis
+    from servotune.cli.verify import read_result
+    from servotune.design import check_design, tuned_lowpass, with_drive_fixed
+    from servotune.template import write_template
+
+    write_template(tmp_path / "ax")
+    toml = tmp_path / "ax" / "axis.toml"
+    toml.write_text(toml.read_text().replace("# [drive.filters]\n# lowpass_hz = 800.0",
+                                             "[drive.filters]\nlowpass_hz = 800.0", 1))
+    axis = load_axis(tmp_path / "ax")
+    design = {"c": 5578.0, "kv": 40.0, "kp": 4.0, "ti": 0.012,
+              "lowpass_frequency": 2 * math.pi * 1200.0}
+    fixed = {"current_kp": axis.drive.current_loop.kp, "current_ti": axis.drive.current_loop.ti,
+             "notches": [], "lowpass": None}
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps({"axis": str(tmp_path / "ax"), "design": design,
+                                "drive_fixed": fixed}))
+    folder, values, kept = read_result(path)
+    d = Design(**values)
+    assert d.lowpass_frequency == pytest.approx(2 * math.pi * 1200.0)
+    checked_axis = with_drive_fixed(load_axis(folder), kept)
+    lp = tuned_lowpass(checked_axis, d)
+    assert lp.f_hz == pytest.approx(1200.0) and checked_axis.drive.lowpass is None
+    result = check_design(checked_axis, d)
+    assert result.problem.drive_for(d).lowpass.f_hz == pytest.approx(1200.0)
+    assert result.initial.lowpass_frequency is None       # the axis as kept: no low-pass
+    assert result.after is not None and result.after.peak_compliance > 0

@@ -68,7 +68,8 @@ def read_result(path) -> tuple[Path, dict, dict | None]:
         The axis folder.
     design : dict
         The design: ``c``, ``kv``, ``kp``, ``ti`` [SI] (and the tuned notch's
-        ``notch_frequency``, ``notch_width``, ``notch_depth`` when it has one).
+        ``notch_frequency``, ``notch_width``, ``notch_depth`` when it has one, the tuned
+        low-pass' ``lowpass_frequency`` [rad/s] when it has one).
     fixed : dict or None
         ``drive_fixed``: the current loop and set-point filters the design was tuned with
         (:func:`servotune.design.with_drive_fixed`); None when the file has none (the axis'
