@@ -288,8 +288,9 @@ def main(argv=None) -> dict:
         return {}
     rows = []
     for n in args.sizes:
-        methods = ["servotune", "scipy", "scipy_defaults"] + (["dense"] if n <= args.dense_max else []) \
-            + ([] if args.no_check else ["check"])
+        methods = (["servotune", "scipy", "scipy_defaults"]
+                   + (["dense"] if n <= args.dense_max else [])
+                   + ([] if args.no_check else ["check"]))
         for method in methods:
             row = _in_subprocess(n, method, args.timeout)
             rows.append(row)

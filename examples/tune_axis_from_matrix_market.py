@@ -7,7 +7,8 @@ at constant velocities, and an ``axis.toml`` that names them together with the d
 milling set-up and the requirements. Loading the description reduces the 146-DOF model by
 Craig-Bampton to the pads, the work piece, the motor and the encoder plus every fixed-interface
 mode up to 600 Hz (13 of them: 1.5 x the band's top, the coverage a verdict needs; with 8, up to
-422 Hz, the verdict says NOT VERIFIED naming the coverage), and fits (Fc, Fs, vs, delta, sigma2) to the measured Stribeck curve. Then
+422 Hz, the verdict says NOT VERIFIED naming the coverage), and fits (Fc, Fs, vs, delta,
+sigma2) to the measured Stribeck curve. Then
 :func:`servotune.design.tune_axis` tunes the guide-way damping C, Kv and the velocity PI against
 the worst work-piece compliance peak over the axis' regimes (standing, feeding at the feed
 speeds of its milling set-up) under the Ms, margin, loop-hierarchy and integral-time
