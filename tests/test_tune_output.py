@@ -17,6 +17,10 @@ def test_the_verdict_comes_first_and_agrees_with_the_exit_status(tmp_path, capsy
     result = json.loads(capsys.readouterr().out)
     label = "VERIFIED" if code == 0 else "NOT VERIFIED"
     assert result["verified"] is (code == 0)
+    from servotune.axis import load_axis
+
+    axis = load_axis(MODELS / "two_mass_fig5")
+    assert result["friction_law"] == (axis.friction.law.name if axis.friction else None)
     first = lines[0]
     assert first.startswith(f"two_mass_fig5: {label}")
     details = lines.index("Details")

@@ -61,6 +61,7 @@ __all__ = [
     # errors
     "CliError",
     "UsageError",
+    "friction_law_of",
     "OutputError",
     # numeric flag types
     "number",
@@ -98,6 +99,22 @@ __all__ = [
 
 DEFAULT_OUT = "out"
 DEFAULT_DURATION = 20.0  # [s] the paper's sweep (Table 3: 10 -> 100 Hz in 20 s)
+
+
+def friction_law_of(axis) -> str | None:
+    """The name of an axis' friction law (``friction_law`` of a command's JSON), or None.
+
+    Parameters
+    ----------
+    axis : servotune.axis.Axis or None
+        The axis (None: a command that works without one).
+
+    Returns
+    -------
+    str or None
+    """
+    friction = getattr(axis, "friction", None)
+    return None if friction is None else friction.law.name
 
 
 class CliError(Exception):

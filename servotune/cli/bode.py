@@ -18,6 +18,7 @@ from ._common import (
     axis_from_args,
     contact_from_args,
     default_notes,
+    friction_law_of,
     print_json,
     require_section,
     save_figure,
@@ -89,6 +90,7 @@ def run(args) -> int:
     with progress.task(f"writing {run.path}"), run.writing() as folder:
         if names:
             save_figure(result.plot(f"{axis.name}: loops with {contact.note}"), folder / names[0])
+        out["friction_law"] = friction_law_of(axis)
         write_results(folder, out)
     if args.json:
         print_json(out)

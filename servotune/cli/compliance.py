@@ -17,6 +17,7 @@ from ._common import (
     check_contact_args,
     contact_from_args,
     default_notes,
+    friction_law_of,
     number,
     print_json,
     save_figure,
@@ -137,6 +138,7 @@ def run(args) -> int:
                 [(c.label, c.omega, c.values) for c in fig9_curves],
                 title=f"{axis.name}: compliance with viscous guide-way damping, no motion "
                       "control (Fig 9)"), folder / names[1])
+        out["friction_law"] = friction_law_of(axis)
         write_results(folder, out)
     if args.json:
         print_json(out)

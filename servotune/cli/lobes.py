@@ -17,6 +17,7 @@ from ._common import (
     axis_from_args,
     contact_from_args,
     default_notes,
+    friction_law_of,
     number,
     print_json,
     require_section,
@@ -261,6 +262,7 @@ def run(args) -> int:
 
             save_figure(plots.plot_stability_lobes(shown, required_depth=required),
                         folder / names[0])
+        out["friction_law"] = friction_law_of(axis)
         write_results(folder, out)
     if args.json:
         print_json(out)

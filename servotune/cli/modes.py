@@ -28,6 +28,7 @@ from ._common import (
     RunOutput,
     add_common_options,
     default_notes,
+    friction_law_of,
     print_json,
     write_results,
 )
@@ -128,6 +129,7 @@ def run(args) -> int:
         "warnings": warnings,
     }
     with out.writing() as folder:
+        result["friction_law"] = friction_law_of(axis)
         write_results(folder, result)
     if args.json:
         print_json(result)

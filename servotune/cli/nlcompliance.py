@@ -20,6 +20,7 @@ from ._common import (
     RunOutput,
     add_common_options,
     default_notes,
+    friction_law_of,
     number,
     print_json,
     save_figure,
@@ -151,6 +152,7 @@ def run(args) -> int:
     data["folder"] = str(out.path)
     data["figures"] = [str(out.file(n)) for n in names]
     with out.writing() as folder:
+        data["friction_law"] = friction_law_of(axis)
         write_results(folder, data)
         if names:
             save_figure(result.plot(), folder / names[0])

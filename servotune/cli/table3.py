@@ -139,6 +139,7 @@ def run(args) -> int:
     result = table.to_dict()
     result["folder"] = str(out.path)
     with out.writing() as folder:
+        result["friction_law"] = "lugre"  # table3 refuses another law
         write_results(folder, result)
     if args.json:
         print_json(result)

@@ -25,6 +25,7 @@ from ._common import (
     add_common_options,
     add_workers_option,
     default_workers,
+    friction_law_of,
     number,
     print_json,
     require_section,
@@ -187,6 +188,7 @@ def run(args) -> int:
                             commission=not args.no_commission)
     interrupt.check("the tuning")
     results = job.to_dict()
+    results["friction_law"] = friction_law_of(axis)
     notes += list(job.result.notes)
     results["notes"] = notes + results["notes"]
     results["warnings"] = list(checks.warnings)

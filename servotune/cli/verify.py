@@ -25,6 +25,7 @@ from ._common import (
     add_common_options,
     add_workers_option,
     default_workers,
+    friction_law_of,
     number,
     print_json,
     save_figure,
@@ -267,7 +268,8 @@ def run(args) -> int:
                                     band_hz=band, speeds=args.speed, simulate_before=False,
                                     progress=task.report)
     rows = [s.to_dict() for r in verdict.regimes for s in r.simulations]
-    out = {"axis": str(axis.path), "axis_name": axis.name, "design": design.to_dict(),
+    out = {"axis": str(axis.path), "axis_name": axis.name, "friction_law": friction_law_of(axis),
+           "design": design.to_dict(),
            "verified": verdict.verified, "reasons": list(verdict.reasons),
            "headline": verdict.headline, "coverage": verdict.coverage,
            "coverage_text": verdict.coverage_text,
