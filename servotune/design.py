@@ -1055,7 +1055,9 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     servotune.tuning.solve.tune : the optimisation this runs.
     servotune.tuning.verify.verify : the dense linear check of a design.
     """
-    if axis.friction is not None:
+    if axis.friction is not None and axis.drive is not None:
+        # the regime models of a driven axis take the LuGre contact (without a drive the
+        # viscous pads alone are tuned, with any law)
         axis.friction.require_lugre("servotune tune")
     settings = axis.tuning
     free = expand_free(settings.free if free is None else free)

@@ -175,3 +175,21 @@ def test_a_law_without_lugre_data_is_refused_by_the_jobs_that_need_it(tmp_path, 
     assert out["error_kind"] == "input"
     assert "'gms'" in out["error"] and f"servotune {name}" in out["error"]
     assert "internal error" not in captured.err
+
+
+def test_without_a_drive_any_law_tunes_the_viscous_pads(tmp_path, capsys):
+    """The two-mass axis of Fig 5 (no drive) with its damper given as the viscous law: tune
+    needs no LuGre data there and reaches the closed-form Copt (4.912e5 N s/m, the paper's)."""
+    import shutil
+
+    folder = tmp_path / "tm"
+    shutil.copytree(Path(__file__).resolve().parents[1] / "models" / "two_mass_fig5", folder)
+    toml = folder / "axis.toml"
+    text = toml.read_text()
+    line = next(x for x in text.splitlines() if x.startswith("viscous = "))
+    toml.write_text(text.replace(line, "", 1).replace(
+        'pads = ["pad1.x"]', 'pads = ["pad1.x"]\n[friction.viscous]\nc = 4.912e5', 1))
+    code = main(["tune", str(folder), "--json", "--out", str(tmp_path / "out")])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["friction_law"] == "viscous"
+    assert out["design"]["c"] == pytest.approx(4.912e5, rel=1e-3)
