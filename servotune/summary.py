@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from .drive import kv_to_m_per_min_per_mm
 from .units import HZ_PER_RAD_S
 
-__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "rounds_table",
+__all__ = ["Table", "inputs_table", "design_table", "regimes_table", "rounds_table", "design_line",
            "baseline_table", "loops_table", "thrust_table", "realisation_table",
            "verdict_lines", "text", "html_table", "realised_notes", "REALISED_NOTE"]
 
@@ -357,6 +357,35 @@ def baseline_table(job) -> Table | None:
                   "nonlinear", "tuned vs comm.", "nonlinear"), tuple(rows), notes)
 
 
+def design_line(d, kv_machine: bool = True) -> str:
+    """Return a design in one line: C, Kv, Kp, Ti and its tuned filters (SI units).
+
+    Parameters
+    ----------
+    d : servotune.tuning.Design
+        The design.
+    kv_machine : bool
+        Also give Kv in the machine-tool unit (m/min)/mm.
+
+    Returns
+    -------
+    str
+        E.g. ``"C 5578 N s/m, Kv 52.95 1/s, Kp 5.198 N m s/rad, Ti 9.573 ms, notch 654.2 Hz
+        (width 1, depth 0.01)"``; a tuned notch of depth 1 (none) is left out.
+    """
+    if d.kv is None:
+        return f"C {d.c:.4g} N s/m"
+    kv = f"Kv {d.kv:.4g} 1/s" + (f" ({kv_to_m_per_min_per_mm(d.kv):.3g} (m/min)/mm)"
+                                 if kv_machine else "")
+    text = f"C {d.c:.4g} N s/m, {kv}, Kp {d.kp:.4g} N m s/rad, Ti {d.ti * 1e3:.4g} ms"
+    n = d.notch
+    if n is not None and n.depth < 1.0 - 1e-9:
+        text += f", notch {n.f_hz:.1f} Hz (width {n.width:.2g}, depth {n.depth:.2g})"
+    if d.lowpass_frequency is not None:
+        text += f", low-pass {d.lowpass_frequency * HZ_PER_RAD_S:.4g} Hz"
+    return text
+
+
 def rounds_table(job) -> Table | None:
     """Return the rounds of tuning and verification (None when there was one plain round).
 
@@ -376,13 +405,7 @@ def rounds_table(job) -> Table | None:
     rows = []
     for r in rounds:
         d = r.design
-        design = ("-" if d is None else
-                  f"C {d.c:.4g}, Kv {d.kv:.4g}, Kp {d.kp:.4g}, Ti {d.ti * 1e3:.4g} ms"
-                  + (f", notch {d.notch.f_hz:.1f} Hz (depth {d.notch.depth:.2g})"
-                     if d.notch is not None and d.notch.depth < 1.0 - 1e-9 else "")
-                  + (f", low-pass {d.lowpass_frequency * HZ_PER_RAD_S:.4g} Hz"
-                     if d.lowpass_frequency is not None else "")
-                  if d.kv is not None else f"C {d.c:.4g}")
+        design = "-" if d is None else design_line(d, kv_machine=False)
         label = "screen" if r.number == 0 else str(r.number)
         rows.append((label, design, r.verdict if len(r.verdict) < 160 else
                      r.verdict[:157] + "...", ", ".join(r.added) or "-"))

@@ -218,7 +218,7 @@ def run(args) -> int:
     print(f"{axis.name}: {head}")
     for line in lines:
         print("    " + line)
-    print(f"  design: {_design_line(r.design)}")
+    print(f"  design: {summary.design_line(r.design)}")
     print(f"  report: {out.file('report.html')}")
     print("Details")
     print(f"  tuned {', '.join(r.problem.free)} over {r.stats.models} regime "
@@ -246,22 +246,6 @@ def run(args) -> int:
     print(f"  wrote {out.path} (results.json, {len(results['files'])} figures, report.html)")
     print(f"  report: {out.file('report.html')}")
     return status
-
-
-def _design_line(d) -> str:
-    """The design in one line (SI, Kv also in (m/min)/mm)."""
-    from ..units import HZ_PER_RAD_S, kv_to_m_per_min_per_mm
-
-    if d.kv is None:
-        return f"C {d.c:.4g} N s/m"
-    text = (f"C {d.c:.4g} N s/m, Kv {d.kv:.4g} 1/s ({kv_to_m_per_min_per_mm(d.kv):.3g} "
-            f"(m/min)/mm), Kp {d.kp:.4g} N m s/rad, Ti {d.ti * 1e3:.4g} ms")
-    n = d.notch
-    if n is not None and n.depth < 1.0 - 1e-9:
-        text += f", notch {n.f_hz:.1f} Hz (width {n.width:.2g}, depth {n.depth:.2g})"
-    if d.lowpass_frequency is not None:
-        text += f", low-pass {d.lowpass_frequency * HZ_PER_RAD_S:.4g} Hz"
-    return text
 
 
 class _no_pool:

@@ -139,18 +139,10 @@ def _filters(problem, design, omega, half=None, period: float = 0.0):
     out = None
     if problem.notch is not None:
         out = notch_response(design, omega, half, period)
-    if problem.lowpass is not None and _has(design, "lowpass_frequency"):
+    if problem.lowpass is not None and design.get("lowpass_frequency") is not None:
         f = lowpass_response(design, omega, problem.lowpass.damping_ratio, half, period)
         out = f if out is None else out * f
     return out
-
-
-def _has(design, name: str) -> bool:
-    """Whether a design (a dict of numbers or casadi symbols) sets ``name``."""
-    try:
-        return design[name] is not None
-    except (KeyError, IndexError):
-        return False
 
 
 def _tan(x):

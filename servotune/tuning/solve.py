@@ -149,8 +149,8 @@ def model_stability(problem: TuningProblem, design: Design) -> list[bool]:
                             model.contact(design.c) if problem.pads else None,
                             problem.pads).is_stable() for model in problem.regimes]
     matrices = ClosedLoopMatrices.of(problem)
-    x0 = problem.initial_design()
-    if matrices.exact and all(getattr(design, v) == getattr(x0, v) for v in FILTER_VARIABLES):
+    if matrices.exact and all(getattr(design, v) == getattr(matrices.initial, v)
+                              for v in FILTER_VARIABLES):
         # (the form holds at the initial set-point filters; other filters are built)
         return [frequency.is_stable_matrix(a) for a in matrices(design)]
     return [frequency.is_stable(matrices.build(model, design)) for model in problem.regimes]
@@ -229,6 +229,16 @@ class ClosedLoopMatrices:
             cls._KEPT.pop(next(iter(cls._KEPT)))
         cls._KEPT[id(problem)] = (problem, out)
         return out
+
+    @property
+    def initial(self) -> Design:
+        """The design the matrices were fitted around (the problem's initial one).
+
+        Returns
+        -------
+        Design
+        """
+        return self._x0
 
     def _monomials(self, d: Design) -> np.ndarray:
         x0 = self._x0
