@@ -11,6 +11,14 @@ the first FRF is the receptance at ``--dof`` with the drive switched off and the
 stuck (the axis' ``stiction`` contact); the natural frequencies and damping ratios of the stored
 modes that move the identified poles most are fitted to it within bounds, and a copy of the
 axis folder with the updated model is written (``updated_axis/``), the user's axis untouched.
+
+``--kind speed-plant`` reads the drive's measuring function instead, motor speed over motor
+torque [rad/(s N m)] (:mod:`servotune.measured.speed_plant`): with ``--axis`` it is compared
+with the axis' speed plant (guide ways in presliding, the ``stiction`` contact) and the
+velocity loop is closed on the measurement by the axis' own drive (its PI, current loop,
+sampling, delays and speed measurement), non-parametrically, as auto-tuners do: the margins,
+Ms and bandwidth of that loop beside the model's. ``--kind closed-loop`` (the work-piece
+compliance under position control) is refused with exit status 2: not in this version.
 """
 
 from __future__ import annotations
@@ -32,11 +40,14 @@ __all__ = ["add_parser", "run"]
 
 FIGURES = ("frf_fit.png", "stabilisation.png")
 UPDATE_FIGURE = "model_update.png"
+SPEED_PLANT_FIGURE = "speed_plant.png"
 UPDATED_AXIS = "updated_axis"
-NOT_DONE = "the drive's measured speed plant (--kind) is not in this version"
+KINDS = ("structure", "speed-plant", "closed-loop")
+NOT_DONE = ("a measured closed-loop work-piece compliance (--kind closed-loop) is not in this "
+            "version")
 _FREQUENCY = number(0.0, 1e6, low_open=True, example=120, unit="Hz")
 _ORDER = number(5, 200, integer=True, example=40)
-QUANTITIES = ("receptance", "mobility", "accelerance")
+QUANTITIES = ("receptance", "mobility", "accelerance", "speed_per_torque")
 
 
 def add_parser(subparsers) -> None:
@@ -66,17 +77,23 @@ def add_parser(subparsers) -> None:
                     "that moves each identified pole most are fitted by least squares on the "
                     "log-magnitude and phase over the band (frequencies within +-20 %, damping "
                     "ratios in [0.001, 0.2]); writes model_update.png and updated_axis/, a copy "
-                    "of the axis folder with the updated structure.npz and modal_damping. Not "
-                    "yet: the drive's measured speed plant (--kind).")
+                    "of the axis folder with the updated structure.npz and modal_damping. "
+                    "--kind speed-plant reads the drive's measured speed plant (motor speed "
+                    "over motor torque, rad/s/N m) and, with --axis, compares it with the "
+                    "axis' (guide ways in presliding) and closes the velocity loop on it with "
+                    "the axis' drive (PI, current loop, sampling, delays, speed by backward "
+                    "difference): margins, Ms and bandwidth, measured and model; writes "
+                    "speed_plant.png. Not yet: --kind closed-loop.")
     p.add_argument("files", nargs="+", metavar="FRF_FILE",
                    help="CSV (f_hz with re,im or mag,phase_deg; '# quantity:' and '# units:' "
                         "comment lines) or UFF dataset 58 (.uff, .unv); several FRFs of one "
                         "excitation on the same frequency lines; the first is the one whose "
                         "residues are 'residue' (give the driving point first)")
-    p.add_argument("--kind", choices=("structure",), default="structure",
+    p.add_argument("--kind", choices=KINDS, default="structure",
                    help="what was measured: 'structure' (FRFs of the machine structure, e.g. "
-                        "hammer tests at the work piece, drive off, pads stuck; the only kind "
-                        "so far)")
+                        "hammer tests at the work piece, drive off, pads stuck); 'speed-plant' "
+                        "(the drive's measuring function: motor speed over motor torque, "
+                        "rad/s/N m; needs --axis); 'closed-loop' is not in this version")
     p.add_argument("--axis", default=None, metavar="AXIS",
                    help="axis folder to update to the measurement (the folder itself is never "
                         "changed: the updated copy goes to "
@@ -85,10 +102,12 @@ def add_parser(subparsers) -> None:
                    help="the DOF of the measurement, force and response (default wp.x; only "
                         "with --axis)")
     p.add_argument("--quantity", choices=QUANTITIES, default=None,
-                   help="the quantity of files that do not state it (default receptance)")
+                   help="the quantity of files that do not state it (default receptance; "
+                        "speed_per_torque with --kind speed-plant)")
     p.add_argument("--units", default=None, metavar="UNIT",
                    help="units of CSV files that do not state them: m/N, mm/N, um/N, nm/N; "
-                        "m/s/N, mm/s/N; m/s^2/N, g/N (default the SI unit)")
+                        "m/s/N, mm/s/N; m/s^2/N, g/N; rad/s/N m, rpm/N m (default the SI "
+                        "unit)")
     p.add_argument("--band-hz", type=_FREQUENCY, nargs=2, metavar=("LO", "HI"), default=None,
                    help="the band to fit [Hz] (default the whole measurement above 0 Hz)")
     p.add_argument("--max-order", type=_ORDER, default=40, metavar="N",
@@ -97,6 +116,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--modes-hz", type=_FREQUENCY, nargs="+", metavar="F", default=None,
                    help="take the poles nearest to these natural frequencies [Hz] instead of "
                         "the automatic rule")
+    p.add_argument("--continuous", action="store_true",
+                   help="with --kind speed-plant: the axis' drive in continuous time, as the "
+                        "paper models it (no sampling, no delays), instead of the digital "
+                        "drive of [drive.sampling]")
     add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
@@ -121,6 +144,17 @@ def run(args) -> int:
     if args.band_hz is not None and args.band_hz[0] >= args.band_hz[1]:
         raise UsageError(f"--band-hz {args.band_hz[0]:g} {args.band_hz[1]:g}: the low "
                          "frequency must be below the high one")
+    if args.kind == "closed-loop":
+        raise UsageError(f"--kind closed-loop: {NOT_DONE}; give --kind structure (drive off, "
+                         "pads stuck) or --kind speed-plant (the drive's measuring function)")
+    if args.kind == "speed-plant":
+        return _run_speed_plant(args)
+    if args.continuous:
+        raise UsageError("--continuous: the drive's model serves --kind speed-plant; a "
+                         "structure measurement has the drive switched off")
+    if args.quantity == "speed_per_torque":
+        raise UsageError("--quantity speed_per_torque is the drive's speed plant: give --kind "
+                         "speed-plant")
     if args.dof is not None and args.axis is None:
         raise UsageError(f"--dof {args.dof}: the DOF of the measurement serves the updating of "
                          "an axis; give --axis AXIS too, or drop --dof")
@@ -140,6 +174,10 @@ def run(args) -> int:
         from ..measured.frf import read_frfs
 
         frfs = read_frfs(files, quantity=args.quantity, units=args.units)
+    speed = [f.name for f in frfs if f.quantity == "speed_per_torque"]
+    if speed:
+        raise UsageError(f"{speed[0]} is a speed per torque, the drive's speed plant: give "
+                         "--kind speed-plant")
     band = None if args.band_hz is None else tuple(f * RAD_S_PER_HZ for f in args.band_hz)
     wanted = None if args.modes_hz is None else [f * RAD_S_PER_HZ for f in args.modes_hz]
     with progress.task(f"identifying modes of {len(frfs)} FRF(s)"):
@@ -239,3 +277,108 @@ def _print_update(update, axis, folder) -> None:
     for note in update.notes:
         print(f"  note: {note}")
     print(f"  updated axis: {folder} (every command takes it; {axis.path} is unchanged)")
+
+
+def _run_speed_plant(args) -> int:
+    """``servotune identify --kind speed-plant``: the measured speed plant against the axis',
+    the velocity loop closed on each."""
+    from .. import progress
+    from ..units import HZ_PER_RAD_S, RAD_S_PER_HZ
+    from ._common import axis_from_args
+
+    flag = "--kind speed-plant"
+    if args.axis is None:
+        raise UsageError(f"{flag}: the velocity loop is closed on the measurement by an axis' "
+                         "drive, and the measurement compared with its model: give --axis AXIS")
+    for given, name in ((args.dof, "--dof"), (args.modes_hz, "--modes-hz")):
+        if given is not None:
+            raise UsageError(f"{name}: not with {flag} (the speed plant's ports are the "
+                             "motor's: torque in, speed out; no modes are identified)")
+    if args.quantity not in (None, "speed_per_torque"):
+        raise UsageError(f"--quantity {args.quantity}: {flag} reads motor speed over motor "
+                         "torque (speed_per_torque)")
+    files = [Path(f) for f in args.files]
+    if len(files) > 1:
+        raise UsageError(f"{flag}: give one file, the measured speed plant (got {len(files)})")
+    names = [] if args.no_plots else [SPEED_PLANT_FIGURE]
+    with progress.task(f"loading {args.axis}"):
+        from ..analysis import axis_contact
+        from ..axis import load_axis
+        from ..measured.speed_plant import SPEED_PLANT_CONTACT
+        from ._common import require_section
+
+        axis = axis_from_args(load_axis(args.axis), args)
+        require_section(axis, "drive", "[drive]", f"servotune identify {flag}",
+                        ": its controllers close the velocity loop on the measurement")
+        require_section(axis, "friction", "[friction]", f"servotune identify {flag}",
+                        ": the pads, in presliding during the measurement, sit on its "
+                        "stiction contact")
+        contact = axis_contact(axis, SPEED_PLANT_CONTACT)
+    out = RunOutput.for_args(args, "identify", files[0].stem, ["results.json", *names])
+    with progress.task(f"reading {files[0]}"):
+        from ..measured.frf import read_frfs
+
+        frfs = read_frfs(files, quantity="speed_per_torque", units=args.units)
+    if len(frfs) > 1:
+        raise UsageError(f"{files[0]}: holds {len(frfs)} FRFs; {flag} takes one, the measured "
+                         "speed plant")
+    frf = frfs[0]
+    band = None if args.band_hz is None else tuple(f * RAD_S_PER_HZ for f in args.band_hz)
+    with progress.task(f"{axis.name}: velocity loop on the measured speed plant"):
+        from ..measured.speed_plant import compare_speed_plant
+
+        try:
+            comparison = compare_speed_plant(frf, axis.structure, axis.drive, contact,
+                                             axis.pads, band)
+        except ValueError as exc:
+            from ._common import CliError
+
+            raise CliError(f"{files[0]}: {exc}") from None
+    result = {"command": "identify", "kind": args.kind, "files": [str(f) for f in files],
+              "frfs": [frf.to_dict()], "axis": str(args.axis), **comparison.to_dict(),
+              "folder": str(out.path), "figures": [str(out.file(n)) for n in names],
+              "not_done": NOT_DONE}
+    result["notes"] = [*frf.defaults, *frf.notes, *result["notes"]]
+    with progress.task(f"writing {out.path}"), out.writing() as folder:
+        if names:
+            from ..measured.figures import plot_speed_plant
+
+            save_figure(plot_speed_plant(comparison, f"{axis.name}: measured speed plant "
+                                                     f"{files[0].name}"), folder / names[0])
+        write_results(folder, result)
+    for text in comparison.warnings:
+        print(f"WARNING: {text}", file=sys.stderr)
+    if args.json:
+        print_json(result)
+        return 0
+    lo, hi = comparison.band
+    print(f"{frf.name}: speed plant (motor speed / motor torque), {frf.omega.size} lines "
+          f"{frf.omega[0] * HZ_PER_RAD_S:g}-{frf.omega[-1] * HZ_PER_RAD_S:g} Hz, against "
+          f"{axis.name} ({contact.note}):")
+    print(f"  FRF error (relative RMS over {lo * HZ_PER_RAD_S:g}-{hi * HZ_PER_RAD_S:g} Hz): "
+          f"{100 * comparison.frf_error:.2f} %")
+    v = result["velocity_loop"]
+    print(f"  velocity loop ({v['drive']} drive, position loop open), closed on:")
+    print(f"    {'':15} {'GM [dB]':>8} {'PM [deg]':>9} {'Ms':>6} {'crossover [Hz]':>15} "
+          f"{'phase cross. [Hz]':>18} {'bandwidth [Hz]':>15}")
+    rows = [("the measurement", v["measured"])]
+    if v["model"] is not None:
+        rows.append(("the model", v["model"]))
+    for label, a in rows:
+        gm = "inf" if a["gain_margin_db"] is None else f"{a['gain_margin_db']:.2f}"
+        pc = "-" if a["phase_crossover_hz"] is None else f"{a['phase_crossover_hz']:.1f}"
+        print(f"    {label:15} {gm:>8} {a['phase_margin_deg']:9.2f} {a['ms']:6.3f} "
+              f"{a['crossover_hz']:15.2f} {pc:>18} {a['bandwidth_hz']:15.2f}")
+    if v["model"] is None:
+        print(f"    the model: {v['model_unstable']}")
+    verdict = {None: "not judged (the measurement ends before |L| has fallen)", True:
+               "stable (Nyquist criterion: -1 not encircled)", False:
+               f"UNSTABLE ({v['unstable_poles']} unstable closed-loop poles, Nyquist criterion)"}
+    print(f"  the loop on the measurement: {verdict[v['stable']]}")
+    for note in result["notes"]:
+        print(f"  note: {note}")
+    for line in comparison.warnings:
+        print(f"  WARNING: {line}")
+    print(f"  not done: {NOT_DONE}")
+    print(f"  wrote {out.path}")
+    return 0

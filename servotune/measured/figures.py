@@ -1,5 +1,5 @@
-"""Figures of a modal identification (the FRF fit, the stabilisation diagram) and of a model
-update.
+"""Figures of a modal identification (the FRF fit, the stabilisation diagram), of a model
+update and of a measured speed plant with the velocity loop closed on it.
 
 SI values come in; Hz and degrees appear only on the axes. Each function draws a
 :class:`~servotune.measured.ema.ModalIdentification` or a
@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 from ..plots import set_caption
 from ..units import HZ_PER_RAD_S
 
-__all__ = ["plot_frf_fit", "plot_model_update", "plot_stabilisation"]
+__all__ = ["plot_frf_fit", "plot_model_update", "plot_speed_plant", "plot_stabilisation"]
 
 #: how each status of the stabilisation diagram is drawn: marker, colour, label
 _STATUS_STYLE = {
@@ -162,3 +162,83 @@ def plot_model_update(update) -> Figure:
                             f"on the {update.contact.kind} contact) against the model before "
                             "and after updating the stored modes' frequencies and damping "
                             "ratios; the updated poles dotted")
+
+
+def _margins_label(analysis) -> str:
+    """'GM 8.5 dB, PM 75.0 deg, Ms 1.62' of a LoopAnalysis."""
+    gm = analysis.gain_margin_db
+    gm_text = f"GM {gm:.2f} dB" if np.isfinite(gm) else "GM inf"
+    return f"{gm_text}, PM {analysis.phase_margin_deg:.1f} deg, Ms {analysis.ms:.3f}"
+
+
+def plot_speed_plant(comparison, title: str = "Speed plant and velocity loop") -> Figure:
+    """Plot a measured speed plant against the model's, and the velocity loops on both.
+
+    Parameters
+    ----------
+    comparison : servotune.measured.speed_plant.SpeedPlantComparison
+        The comparison.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: |P| and its phase, measured (solid, light) and model (dashed). Right: |L| and
+        its phase of the velocity loop on each, the gain and phase crossovers of the loop on
+        the measured plant marked, the margins in the legend.
+    """
+    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    axes = fig.subplots(2, 2, sharex="col", height_ratios=(2, 1))
+    f = comparison.omega * HZ_PER_RAD_S
+    (p_mag, l_mag), (p_ph, l_ph) = axes
+    for values, style, colour, width, alpha, label in (
+            (comparison.measured, "-", "0.2", 2.5, 0.45, "measured"),
+            (comparison.model, "--", "tab:blue", 1.3, 1.0,
+             f"model ({100 * comparison.frf_error:.2f} % RMS apart)")):
+        p_mag.loglog(f, np.abs(values), style, color=colour, lw=width, alpha=alpha, label=label)
+        p_ph.semilogx(f, np.rad2deg(np.angle(values)), style, color=colour, lw=width,
+                      alpha=alpha)
+    p_mag.set_ylabel("|P| [rad/s/N m]")
+    p_mag.set_title(f"Speed plant: motor speed / motor torque ({comparison.contact.kind} "
+                    "guide ways)", fontsize="medium")
+    loops = [(comparison.l_measured, "-", "0.2", 2.5, 0.45,
+              "on the measured plant: " + _margins_label(comparison.measured_loop))]
+    if comparison.model_loop is not None:
+        loops.append((comparison.l_model, "--", "tab:blue", 1.3, 1.0,
+                      "on the model: " + _margins_label(comparison.model_loop)))
+    else:
+        loops.append((comparison.l_model, "--", "tab:red", 1.3, 1.0,
+                      "on the model: its closed loop is unstable"))
+    for values, style, colour, width, alpha, label in loops:
+        l_mag.loglog(f, np.abs(values), style, color=colour, lw=width, alpha=alpha, label=label)
+        l_ph.semilogx(f, np.rad2deg(np.unwrap(np.angle(values))), style, color=colour,
+                      lw=width, alpha=alpha)
+    l_mag.axhline(1.0, color="0.5", lw=0.8)
+    l_ph.axhline(-180.0, color="0.5", lw=0.8)
+    a = comparison.measured_loop
+    for w, colour in ((a.crossover, "tab:green"), (a.phase_crossover, "tab:orange")):
+        if np.isfinite(w):
+            for ax in (l_mag, l_ph):
+                ax.axvline(w * HZ_PER_RAD_S, color=colour, ls=":", lw=1.0)
+    if np.isfinite(comparison.nyquist):
+        for ax in (l_mag, l_ph):
+            ax.axvline(comparison.nyquist * HZ_PER_RAD_S, color="0.3", ls="-.", lw=0.8)
+    l_mag.set_ylabel("|L| [-]")
+    l_mag.set_title(f"Velocity loop ({comparison.drive_kind} drive), position loop open",
+                    fontsize="medium")
+    p_ph.set_ylabel("phase [deg]")
+    l_ph.set_ylabel("phase [deg]")
+    for ax in (p_ph, l_ph):
+        ax.set_xlabel("frequency [Hz]")
+    for ax in (p_mag, l_mag):
+        ax.legend(fontsize="small")
+    for ax in axes.ravel():
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(title)
+    nyquist = ("; the velocity controller's Nyquist frequency dash-dotted"
+               if np.isfinite(comparison.nyquist) else "")
+    return set_caption(fig, "The measured speed plant against the model's, and the velocity "
+                            "loop closed on each by the drive's own controllers (gain "
+                            "crossover green, phase crossover orange, of the loop on the "
+                            f"measurement{nyquist})")

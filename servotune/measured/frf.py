@@ -2,9 +2,10 @@
 
 An impact-hammer test at the work piece gives receptances (displacement over force, m/N), or
 mobilities (m/s per N) or accelerances (m/s^2 per N) when the sensor is a velocity or an
-acceleration pick-up. Every file comes in as :class:`MeasuredFrf`: the angular frequencies
-[rad/s], the complex values in SI units and the quantity they are, so that what follows never
-sees Hz, mm or g.
+acceleration pick-up. The drive's own measuring function of the speed loop gives the speed
+plant, motor speed over motor torque (``speed_per_torque``, rad/(s N m)). Every file comes in
+as :class:`MeasuredFrf`: the angular frequencies [rad/s], the complex values in SI units and
+the quantity they are, so that what follows never sees Hz, mm, g or rpm.
 
 Files
 -----
@@ -15,7 +16,9 @@ given by the caller; without either the values are receptances in m/N.
 
 UFF dataset 58 ("function at nodal DOF"), read by pyuff: every record of function type 4
 (frequency response function) is one FRF; its ordinate type says the quantity (8 displacement,
-11 velocity, 12 acceleration, over 13 force), a dataset 164 in the file its units.
+11 velocity, 12 acceleration, over 13 force), a dataset 164 in the file its units. A velocity
+over a force whose response and reference directions are both rotations (+-RX, RY, RZ, codes
+4-6) is an angular speed over a torque: the speed plant.
 
 Examples
 --------
@@ -59,7 +62,16 @@ QUANTITIES: dict[str, tuple[str, dict[str, float]]] = {
     "receptance": ("m/N", {"m/N": 1.0, "mm/N": 1e-3, "um/N": 1e-6, "nm/N": 1e-9}),
     "mobility": ("m/s/N", {"m/s/N": 1.0, "(m/s)/N": 1.0, "mm/s/N": 1e-3, "(mm/s)/N": 1e-3}),
     "accelerance": ("m/s^2/N", {"m/s^2/N": 1.0, "(m/s^2)/N": 1.0, "g/N": 9.80665}),
+    "speed_per_torque": ("rad/s/N m", {
+        "rad/s/N m": 1.0, "rad/(s N m)": 1.0, "(rad/s)/(N m)": 1.0, "(rad/s)/N m": 1.0,
+        "1/(s N m)": 1.0, "rpm/N m": 2 * math.pi / 60, "(1/min)/(N m)": 2 * math.pi / 60,
+        "1/min/N m": 2 * math.pi / 60}),
 }
+
+#: what each quantity is, for messages
+_QUANTITY_WORDS = {"receptance": "receptance (m/N)", "mobility": "mobility (m/s/N)",
+                   "accelerance": "accelerance (m/s^2/N)",
+                   "speed_per_torque": "speed_per_torque (rad/s/N m: the drive's speed plant)"}
 
 #: file-name endings read as Universal File Format (anything else is read as CSV)
 UFF_SUFFIXES = (".uff", ".unv", ".uf", ".58")
@@ -90,7 +102,8 @@ class MeasuredFrf:
     values : numpy.ndarray
         The complex FRF at ``omega`` in SI units of ``quantity`` (read-only).
     quantity : str
-        ``"receptance"`` [m/N], ``"mobility"`` [m/(s N)] or ``"accelerance"`` [m/(s^2 N)].
+        ``"receptance"`` [m/N], ``"mobility"`` [m/(s N)], ``"accelerance"`` [m/(s^2 N)] or
+        ``"speed_per_torque"`` [rad/(s N m)] (motor speed over motor torque).
     name : str
         What the FRF is, for tables and figures (the file, and the record and DOFs of a UFF).
     source : pathlib.Path
@@ -169,10 +182,10 @@ def _unit_factor(quantity: str, units: str, where: str) -> float:
 
 
 def _check_quantity(quantity: str, where: str) -> str:
-    key = quantity.strip().lower()
+    key = re.sub(r"[\s-]+", "_", quantity.strip().lower())
     if key not in QUANTITIES:
-        raise FrfFileError(f"{where}: quantity {quantity!r} is not known; give receptance "
-                           "(m/N), mobility (m/s/N) or accelerance (m/s^2/N)")
+        raise FrfFileError(f"{where}: quantity {quantity!r} is not known; give "
+                           f"{', '.join(_QUANTITY_WORDS.values())}")
     return key
 
 
@@ -212,9 +225,9 @@ def read_frf_csv(path, quantity: str | None = None, units: str | None = None) ->
     path : str or os.PathLike
         The file: a header row with ``f_hz`` [Hz] and ``re, im`` or ``mag, phase_deg``
         (magnitude, phase in degrees); ``#`` lines are comments, and the comment lines before
-        the header may state ``# quantity: receptance|mobility|accelerance`` and
-        ``# units: m/N`` (also ``mm/N``, ``um/N``, ``nm/N``; ``m/s/N``, ``mm/s/N``;
-        ``m/s^2/N``, ``g/N``).
+        the header may state ``# quantity: receptance|mobility|accelerance|speed_per_torque``
+        and ``# units: m/N`` (also ``mm/N``, ``um/N``, ``nm/N``; ``m/s/N``, ``mm/s/N``;
+        ``m/s^2/N``, ``g/N``; ``rad/s/N m``, ``rpm/N m``).
     quantity : str, optional
         The quantity when the file does not state it (default receptance). A file that states
         another is refused.
@@ -241,7 +254,8 @@ def read_frf_csv(path, quantity: str | None = None, units: str | None = None) ->
         q = _check_quantity(text, f"{path}, line {line}")
         if quantity is not None and _check_quantity(quantity, "--quantity") != q:
             raise FrfFileError(f"{path}, line {line}: the file states a {q}, but a {quantity} "
-                               "was asked for; drop the --quantity or correct the file")
+                               "was asked for (--quantity, or --kind speed-plant); correct the "
+                               "file or the option")
     elif quantity is not None:
         q = _check_quantity(quantity, "--quantity")
     else:
@@ -289,12 +303,12 @@ def _uff_error(path: Path, message: str, record: int | None = None) -> FrfFileEr
     return FrfFileError(f"{where}: {message}")
 
 
-def _uff_unit_factor(uff, types, path: Path) -> tuple[float, list[str]]:
-    """The factor from the file's units to SI for an FRF over force (dataset 164), 1 without
-    one; the notes to report."""
+def _uff_unit_factor(uff, types, path: Path) -> tuple[float, float]:
+    """The length and force factors of the file's units (dataset 164; 1, 1 without one): SI
+    is the file's value divided by them."""
     where = np.flatnonzero(np.asarray(types) == 164)
     if not where.size:
-        return 1.0, []
+        return 1.0, 1.0
     try:
         units = uff.read_sets(int(where[0]))
         length, force = float(units["length"]), float(units["force"])
@@ -304,11 +318,18 @@ def _uff_unit_factor(uff, types, path: Path) -> tuple[float, list[str]]:
     if not (length > 0 and force > 0 and math.isfinite(length) and math.isfinite(force)):
         raise _uff_error(path, f"the units dataset 164 has length factor {length:g} and force "
                                f"factor {force:g}; both must be positive", int(where[0]) + 1)
-    # to SI divide by the factor (dataset 164): response / force -> * force / length
-    factor = force / length
-    notes = [] if math.isclose(factor, 1.0) else [
+    return length, force
+
+
+def _uff_scale(path: Path, quantity: str, length: float, force: float) -> tuple[float, tuple]:
+    """The factor to SI of a record's values and the note to report: to SI divide by the
+    factors (dataset 164), so a response over a force is multiplied by force / length, an angular
+    speed over a torque (force times length; the radian has no unit factor) by
+    force * length."""
+    factor = force * length if quantity == "speed_per_torque" else force / length
+    notes = () if math.isclose(factor, 1.0) else (
         f"{path.name}: values scaled by {factor:g} to SI (dataset 164: length factor "
-        f"{length:g}, force factor {force:g})"]
+        f"{length:g}, force factor {force:g})",)
     return factor, notes
 
 
@@ -355,7 +376,7 @@ def read_frf_uff(path, quantity: str | None = None) -> list[MeasuredFrf]:
         raise _uff_error(path, f"holds dataset(s) {found}, no dataset 58 (function at nodal "
                                "DOF); export the FRFs as dataset 58 with function type 4 "
                                "(frequency response function)")
-    factor, unit_notes = _uff_unit_factor(uff, types, path)
+    units = _uff_unit_factor(uff, types, path)
     asked = None if quantity is None else _check_quantity(quantity, "--quantity")
     frfs, skipped = [], []
     for i in records:
@@ -369,7 +390,7 @@ def read_frf_uff(path, quantity: str | None = None) -> list[MeasuredFrf]:
         if kind != 4:
             skipped.append(f"{record} ({_UFF_FUNCTIONS.get(kind, f'type {kind}')})")
             continue
-        frfs.append(_uff_record(path, record, data, factor, asked, unit_notes))
+        frfs.append(_uff_record(path, record, data, units, asked))
     if not frfs:
         raise _uff_error(path, "no dataset 58 holds a frequency response function (function "
                                f"type 4); records: {', '.join(skipped)}; export the FRFs")
@@ -380,8 +401,16 @@ def read_frf_uff(path, quantity: str | None = None) -> list[MeasuredFrf]:
     return frfs
 
 
-def _uff_record(path: Path, record: int, data: dict, factor: float, asked: str | None,
-                unit_notes: list[str]) -> MeasuredFrf:
+def _rotational(code) -> bool:
+    """Whether a UFF direction code is a rotation (+-4, 5, 6)."""
+    try:
+        return abs(int(code)) in (4, 5, 6)
+    except (TypeError, ValueError):
+        return False
+
+
+def _uff_record(path: Path, record: int, data: dict, units: tuple[float, float],
+                asked: str | None) -> MeasuredFrf:
     """One FRF of a dataset-58 record."""
     abscissa = int(data.get("abscissa_spec_data_type", 18) or 18)
     if abscissa not in (0, 18):
@@ -399,6 +428,9 @@ def _uff_record(path: Path, record: int, data: dict, factor: float, asked: str |
     denominator = int(data.get("orddenom_spec_data_type", 13) or 13)
     defaults = []
     stated = _UFF_ORDINATES.get(ordinate)
+    if stated == "mobility" and _rotational(data.get("rsp_dir")) and _rotational(
+            data.get("ref_dir")):
+        stated = "speed_per_torque"  # an angular velocity over a moment
     if denominator != 13:
         raise _uff_error(path, f"the ordinate denominator is of type {denominator}, not force "
                                "(13): an FRF over the hammer force is expected", record)
@@ -406,10 +438,15 @@ def _uff_record(path: Path, record: int, data: dict, factor: float, asked: str |
         q = asked or "receptance"
         defaults.append(f"{path.name} record {record}: ordinate type {ordinate} does not say the "
                      f"quantity; a {q}" + ("" if asked else " (no --quantity)"))
+    elif asked == "speed_per_torque" and stated == "mobility":
+        q = asked  # a drive's export need not mark the motor's rotation in the directions
+        defaults.append(f"{path.name} record {record}: a velocity over a force (ordinate type "
+                        f"{ordinate}, translational directions) taken as speed per torque")
     else:
         if asked is not None and asked != stated:
             raise _uff_error(path, f"holds a {stated} (ordinate type {ordinate}), but a "
-                                   f"{asked} was asked for; drop the --quantity", record)
+                                   f"{asked} was asked for (--quantity, or --kind speed-plant); "
+                                   "correct the file or the option", record)
         q = stated
     if x[0] < 0 or np.any(np.diff(x) <= 0) or not np.all(np.isfinite(x)):
         raise _uff_error(path, "the frequencies do not increase from >= 0 Hz", record)
@@ -418,8 +455,9 @@ def _uff_record(path: Path, record: int, data: dict, factor: float, asked: str |
     rsp = f"{data.get('rsp_node', '?')}:{_direction(data.get('rsp_dir'))}"
     ref = f"{data.get('ref_node', '?')}:{_direction(data.get('ref_dir'))}"
     name = f"{path.name} #{record} ({rsp}/{ref})"
+    factor, unit_notes = _uff_scale(path, q, *units)
     return MeasuredFrf(2 * math.pi * x, values * factor, q, name, path, tuple(defaults),
-                       tuple(unit_notes))
+                       unit_notes)
 
 
 def _direction(code) -> str:
