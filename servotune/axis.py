@@ -45,6 +45,7 @@ import copyreg
 import dataclasses
 import itertools
 import math
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -677,20 +678,22 @@ def _check_dofs(model: ModalModel, names, file, field):
         raise _err(file, field, str(exc), "name DOFs of the structure") from None
 
 
-def _table(data, name, file, required=(), optional=()):
-    """A sub-table with only known keys, the required ones present."""
+def _table(data, name, file, required=(), optional=(), parent=""):
+    """A sub-table with only known keys, the required ones present (``parent``: the section
+    that holds it, as the file names it, e.g. "drive")."""
     table = data.get(name)
     if table is None:
         return None
+    label = f"[{parent}.{name}]" if parent else f"[{name}]"
     if not isinstance(table, dict):
-        raise _err(file, f"[{name}]", f"got {table!r}", f"make [{name}] a table")
+        raise _err(file, label, f"got {table!r}", f"make {label} a table")
     unknown = set(table) - set(required) - set(optional)
     if unknown:
-        raise _err(file, f"[{name}]", f"unknown keys {sorted(unknown)}",
+        raise _err(file, label, f"unknown keys {sorted(unknown)}",
                    f"use {sorted(set(required) | set(optional))} (check the spelling)")
     missing = [k for k in required if k not in table]
     if missing:
-        raise _err(file, f"[{name}]", f"missing {missing}", "add them (see `servotune init`)")
+        raise _err(file, label, f"missing {missing}", "add them (see `servotune init`)")
     return table
 
 
@@ -742,7 +745,12 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
     try:
         law = cls.from_table(table.get(name, "bianchi2014"))
     except (TypeError, ValueError, KeyError) as exc:
-        raise _err(file, f"[friction] {name}", str(exc), cls.table_hint) from None
+        text = str(exc)
+        key = re.search(r"unexpected keyword argument '(\w+)'", text)
+        if key:  # a mistyped key: say so in the file's words, not the constructor's
+            raise _err(file, f"[friction.{name}]", f"unknown key {key.group(1)!r}",
+                       f"check the spelling; {cls.table_hint}") from None
+        raise _err(file, f"[friction] {name}", text, cls.table_hint) from None
     measurements = table.get("measurements")
     if measurements is not None:
         if not isinstance(measurements, dict) or set(measurements) - {"stribeck"}:
@@ -765,11 +773,15 @@ def _friction(data, structure, folder, file) -> GuideWayFriction | None:
             raise _err(file, "[friction] measurements.stribeck", str(exc),
                        "give a CSV of sliding friction over both velocity signs") from None
     _check_bristles(getattr(law, "lugre_parameters", None), file, name)
+    _check_lugre_ranges(getattr(law, "lugre_parameters", None), file, name)
     viscous = table.get("viscous") if not isinstance(table.get("viscous"), dict) else None
+    viscous = _number({"viscous": viscous}, "viscous", file, "friction", positive=False,
+                      low=0.0, high=1e10, unit="N s/m")
+    if len(set(pads)) != len(pads):
+        raise _err(file, "[friction] pads", f"{pads!r} names a DOF twice",
+                   "list each pad's relative-X DOF once")
     try:
-        return GuideWayFriction(tuple(pads), viscous=_number(
-            {"viscous": viscous}, "viscous", file, "friction", positive=False, low=0.0,
-            high=1e10, unit="N s/m"), law=law)
+        return GuideWayFriction(tuple(pads), viscous=viscous, law=law)
     except ValueError as exc:
         raise _err(file, "[friction]", str(exc), "fix the values") from None
 
@@ -794,6 +806,26 @@ def _check_bristles(params, file, name) -> None:
                    "2.7 ms)",
                    "check the unit (N s/m) and the exponent of sigma1, e.g. sigma1 = "
                    f"{2.7e-3 * params.sigma0:.2g} for 2.7 ms")
+
+
+#: Plausible ranges of the LuGre parameters of an axis' guide ways (totals, SI): far wider
+#: than identified guide ways (Bianchi et al. 2014: Fc 2.2 kN, vs 0.01 m/s, sigma2 5.6 kN s/m;
+#: Canudas de Wit et al. 1995: vs 1e-3 m/s), to catch unit and exponent slips only.
+LUGRE_RANGES = {"fc": (0.0, 1e7, "N"), "fs": (0.0, 1e7, "N"), "vs": (1e-7, 1.0, "m/s"),
+                "sigma0": (0.0, 1e14, "N/m"), "sigma2": (0.0, 1e10, "N s/m")}
+
+
+def _check_lugre_ranges(params, file, name) -> None:
+    """Refuse LuGre parameters outside what any guide way has (a unit or exponent slip)."""
+    if params is None:
+        return
+    for key, (low, high, unit) in LUGRE_RANGES.items():
+        value = getattr(params, key)
+        if not low <= value <= high:
+            raise _err(file, f"[friction.{name}] {key}", f"{value:g} {unit} is outside the "
+                       f"plausible range [{low:g}, {high:g}] {unit} of guide-way friction",
+                       f"check the value and its unit ({unit}, axis totals)"
+                       + (", e.g. 0.01 m/s, not mm/s" if key == "vs" else ""))
 
 
 _MOTOR_KEYS = ("torque_constant", "back_emf_constant", "resistance", "inductance")
@@ -832,14 +864,18 @@ def _drive(data, structure, file, defaults) -> Drive | None:
     if motor_missing:
         raise _err(file, "[drive.motor]", f"missing {motor_missing}",
                    "add them from the motor data sheet (see `servotune init`)")
-    motor = _table(table, "motor", file, _MOTOR_KEYS, (*motor_optional, "torque_max"))
-    trans = _table(table, "transmission", file, ("ratio",), ("lead", "belt_ratio"))
-    current = _table(table, "current_loop", file, ("kp", "ti"))
-    velocity = _table(table, "velocity_loop", file, ("kp", "ti"))
-    position = _table(table, "position_loop", file, (), ("kv", "kv_m_per_min_per_mm"))
-    feedforward = _table(table, "feedforward", file, (), ("velocity", "torque_inertia")) or {}
+    motor = _table(table, "motor", file, _MOTOR_KEYS, (*motor_optional, "torque_max"),
+                   parent="drive")
+    trans = _table(table, "transmission", file, ("ratio",), ("lead", "belt_ratio"),
+                   parent="drive")
+    current = _table(table, "current_loop", file, ("kp", "ti"), parent="drive")
+    velocity = _table(table, "velocity_loop", file, ("kp", "ti"), parent="drive")
+    position = _table(table, "position_loop", file, (), ("kv", "kv_m_per_min_per_mm"),
+                      parent="drive")
+    feedforward = _table(table, "feedforward", file, (), ("velocity", "torque_inertia"),
+                         parent="drive") or {}
     filters = _table(table, "filters", file, (), ("lowpass_hz", "notch_hz", "notch_width",
-                                                   "notch_depth")) or {}
+                                                   "notch_depth"), parent="drive") or {}
     encoder = table.get("encoder", "linear")
     if encoder not in ("linear", "motor"):
         raise _err(file, "[drive] encoder", f"got {encoder!r}", 'give "linear" or "motor"')
@@ -857,17 +893,29 @@ def _drive(data, structure, file, defaults) -> Drive | None:
                 raise _err(file, f"[drive.motor] {name}", f"got {motor[name]!r}",
                            'give one DOF name, e.g. "motor.rotor"')
             _check_dofs(structure, [motor[name]], file, f"[drive.motor] {name}")
+    if motor.get("rotor", "motor.rotor") == motor.get("stator", "motor.stator"):
+        raise _err(file, "[drive.motor] stator", f"the same DOF as rotor "
+                   f"({motor.get('rotor', 'motor.rotor')!r}): the torque acts between the two, "
+                   "so it would cancel", 'give the stator\'s own rotation DOF (e.g. '
+                   '"motor.stator"), or leave stator out for a grounded stator')
     if encoder == "linear":
         _check_dofs(structure, ["encoder.x"], file, "[drive] encoder = 'linear'")
     try:
-        lowpass = (LowPassFilter(filters["lowpass_hz"]) if "lowpass_hz" in filters else None)
-        notches = _notches(filters, file)
-        limits = _limits(motor, file, defaults)
         sampling = _sampling(table, file, defaults)
+        lowpass = _number(filters, "lowpass_hz", file, "drive.filters", unit="Hz")
+        _below_nyquist(lowpass, "lowpass_hz", sampling, file)
+        lowpass = None if lowpass is None else LowPassFilter(lowpass)
+        notches = _notches(filters, file)
+        for i, notch in enumerate(notches):
+            _below_nyquist(notch.f_hz, "notch_hz" + (f" (notch {i + 1})" if len(notches) > 1
+                                                     else ""), sampling, file)
+        limits = _limits(motor, file, defaults)
+        motor_values = [_number(motor, k, file, "drive.motor", low=_MOTOR_RANGES[k][0],
+                                high=_MOTOR_RANGES[k][1], unit=_MOTOR_RANGES[k][2])
+                        for k in _MOTOR_KEYS]
+        _check_winding(*motor_values[2:], file)
         return Drive(
-            motor=Motor(*(_number(motor, k, file, "drive.motor", low=_MOTOR_RANGES[k][0],
-                                  high=_MOTOR_RANGES[k][1], unit=_MOTOR_RANGES[k][2])
-                          for k in _MOTOR_KEYS),
+            motor=Motor(*motor_values,
                         rotor=motor.get("rotor", "motor.rotor"),
                         stator=motor.get("stator", "motor.stator")),
             ratio=_number(trans, "ratio", file, "drive.transmission", low=1e-7, high=10.0,
@@ -875,23 +923,54 @@ def _drive(data, structure, file, defaults) -> Drive | None:
             current_loop=PIController(
                 _number(current, "kp", file, "drive.current_loop", low=1e-6, high=1e6,
                         unit="V/A"),
-                _number(current, "ti", file, "drive.current_loop", low=1e-7, high=1e3,
+                _number(current, "ti", file, "drive.current_loop", low=1e-7, high=1.0,
                         unit="s")),
             velocity_loop=PIController(
                 _number(velocity, "kp", file, "drive.velocity_loop", low=1e-9, high=1e7,
                         unit="N m s/rad"),
-                _number(velocity, "ti", file, "drive.velocity_loop", low=1e-7, high=1e3,
+                _number(velocity, "ti", file, "drive.velocity_loop", low=1e-7, high=10.0,
                         unit="s")),
             kv=kv, feedback=encoder,
             velocity_feedforward=_number(feedforward, "velocity", file, "drive.feedforward", 0.0,
-                                         positive=False),
+                                         positive=False, low=0.0, high=2.0,
+                                         unit="(a gain: 1 feeds the whole commanded speed)"),
             torque_feedforward_inertia=_number(feedforward, "torque_inertia", file,
-                                               "drive.feedforward", 0.0, positive=False),
+                                               "drive.feedforward", 0.0, positive=False,
+                                               low=0.0, high=1e3, unit="kg m^2"),
             lowpass=lowpass, notches=notches, sampling=sampling, limits=limits)
     except AxisFormatError:
         raise
     except ValueError as exc:
         raise _err(file, "[drive]", str(exc), "fix the value") from None
+
+
+def _below_nyquist(f_hz, key, sampling, file) -> None:
+    """Refuse a set-point filter at or above half the current controller's sample rate (the
+    drive computes the filter at that rate)."""
+    if f_hz is None or sampling.is_continuous:
+        return
+    nyquist = 0.5 / sampling.current_period
+    if f_hz >= nyquist:
+        raise _err(file, f"[drive.filters] {key}", f"{f_hz:g} Hz is at or above half the "
+                   f"current controller's sample rate ({nyquist:g} Hz, [drive.sampling] "
+                   f"current_period = {sampling.current_period:g} s): the drive cannot "
+                   "compute the filter", f"give a frequency below {nyquist:g} Hz in Hz (not "
+                   "rad/s), or a shorter current_period")
+
+
+#: Largest plausible electrical time constant L / R of a servo motor's winding [s]: data
+#: sheets give 1 to 50 ms; seconds are a unit slip (mH given as H).
+WINDING_TIME_MAX = 1.0
+
+
+def _check_winding(resistance, inductance, file) -> None:
+    tau = inductance / resistance
+    if tau > WINDING_TIME_MAX:
+        raise _err(file, "[drive.motor] inductance",
+                   f"L / R = {inductance:g} H / {resistance:g} ohm = {tau:.3g} s: an electrical "
+                   f"time constant above {WINDING_TIME_MAX:g} s no servo motor has (data sheets "
+                   "give 1 to 50 ms)", "check the units: inductance in H (3 mH = 3.0e-3), "
+                   "resistance in ohm")
 
 
 def _notches(filters: dict, file) -> tuple:
@@ -1206,6 +1285,11 @@ def _operation(data, drive, friction, cutting, requirements, file, defaults
     rapid = _number(table, "rapid_speed", file, "operation", low=1e-4, high=20.0, unit="m/s")
     if rapid is None and drive.speed_max is not None:
         rapid = drive.speed_max
+        if rapid > 20.0:
+            raise _err(file, "[drive.transmission] ratio", f"speed_max_rpm x ratio = "
+                       f"{rapid:.3g} m/s at the slide, past any machine tool (20 m/s)",
+                       "give the ratio in m/rad: lead / (2 pi) / belt ratio, e.g. 1.59e-3 "
+                       "for a 10 mm lead (or give [operation] rapid_speed)")
         defaults.append(f"[operation] rapid_speed from [drive.motor] speed_max_rpm and the "
                         f"transmission: {rapid:.3g} m/s ({rapid * 60:.3g} m/min)")
     elif rapid is not None and drive.speed_max is not None and rapid > drive.speed_max * 1.000001:
