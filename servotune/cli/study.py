@@ -48,7 +48,8 @@ def add_parser(subparsers) -> None:
                     "before any sample runs (every varied path, each value's type, the values "
                     "the axis loader refuses). Exit status 0 when every sample ran (failed "
                     "samples are rows with their reason), 1 for a bad study file, 130 "
-                    "interrupted (the rows written stay, and the line says where).")
+                    "interrupted (the rows written stay, and the line says where); 1 too when "
+                    "every sample failed.")
     p.add_argument("study", help="study file (TOML)")
     p.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
                    help="address of a running dask scheduler (tcp://host:8786); default a "
@@ -107,8 +108,9 @@ def run(args) -> int:
     Returns
     -------
     int
-        The exit status: 0 the study ran (failed samples are rows with their reason), 130
-        interrupted (with one line saying what the folder keeps). Errors are raised, and
+        The exit status: 0 the study ran (failed samples are rows with their reason), 1
+        every sample failed (nothing to summarise: the line says why and where the rows are),
+        130 interrupted (with one line saying what the folder keeps). Errors are raised, and
         reported by :func:`servotune.cli.main` with status 1.
     """
     from .. import progress
@@ -149,13 +151,23 @@ def run(args) -> int:
         summary, files = write_summary(study, result, plots=not args.no_plots)
     except KeyboardInterrupt:
         return _interrupted(what, folder, keys, before)
-    out = {"study": study.name, "folder": str(result.folder), "run": result.to_dict(),
-           "summary": summary.to_dict(),
+    all_failed = summary.finished > 0 and summary.failed == summary.finished
+    status = 1 if all_failed else 0
+    out = {"study": study.name, "folder": str(result.folder),
+           "status": "failed" if all_failed else "done", "exit_status": status,
+           "run": result.to_dict(), "summary": summary.to_dict(),
            "files": [str(p.relative_to(result.folder)) for p in files]
            + ["results.parquet", "rows/"]}
+    if all_failed:
+        import sys
+
+        first_id, first = summary.failures[0]
+        print(f"servotune study: error: all {summary.failed} samples failed, so the study has "
+              f"no result (sample {first_id}: {first}); the reasons are in "
+              f"{result.folder}/results.parquet", file=sys.stderr)
     if args.json:
         print_json(out)
-        return 0
+        return status
     print(f"study {study.name}: {summary.counts()}")
     print(f"  this run: {result.computed} computed, {result.skipped} already done, "
           f"{result.wall_time:.1f} s on {result.scheduler} "
@@ -167,4 +179,4 @@ def run(args) -> int:
     if len(summary.failures) > 5:
         print(f"  ... {len(summary.failures) - 5} more failures in summary.html")
     print(f"  wrote {result.folder} (results.parquet, summary.html, rows/)")
-    return 0
+    return status

@@ -37,6 +37,7 @@ class StudySummary:
     spreads: dict = field(default_factory=dict)   # column -> {min, median, max, count}
     failures: tuple = ()            # (sample_id, error) of the failed samples
     inputs: tuple = ()              # the varied fields (dotted paths)
+    unchecked: int = 0              # done samples whose design fails its linear checks
 
     @property
     def finished(self) -> int:
@@ -67,13 +68,17 @@ class StudySummary:
         '2 of 3 samples run (1 not run): 1 of 2 verified (50 %), 1 failed'
         >>> StudySummary(samples=2, done=2, failed=0, verified=None).counts()
         '2 of 2 samples run: 2 done, 0 failed'
+        >>> StudySummary(samples=2, done=2, failed=0, verified=None, unchecked=2).counts()
+        '2 of 2 samples run: 2 done (2 with a design that fails its linear checks), 0 failed'
         """
         n = self.finished
         text = f"{n} of {self.samples} samples run"
         if n < self.samples:
             text += f" ({self.samples - n} not run)"
         if self.verified is None:
-            return text + f": {self.done} done, {self.failed} failed"
+            bad = (f" ({self.unchecked} with a design that fails its linear checks)"
+                   if self.unchecked else "")
+            return text + f": {self.done} done{bad}, {self.failed} failed"
         text += f": {self.verified} of {n} verified"
         if n:
             text += f" ({100.0 * self.verified / n:.0f} %)"
@@ -90,7 +95,8 @@ class StudySummary:
             JSON-ready values (SI; str, numbers, lists, None).
         """
         return {"samples": self.samples, "finished": self.finished, "done": self.done,
-                "failed": self.failed, "verified": self.verified,
+                "failed": self.failed, "linear_checks_failed": self.unchecked,
+                "verified": self.verified,
                 "verified_share": self.verified_share, "counts": self.counts(),
                 "spreads": self.spreads,
                 "failures": [{"sample_id": i, "error": e} for i, e in self.failures],
@@ -135,8 +141,10 @@ def summarise(rows: list[dict], samples: int) -> StudySummary:
                             "max": float(x.max()), "count": int(x.size)}
     inputs = tuple(dict.fromkeys(k[len(INPUT_PREFIX):] for r in rows for k in r
                                  if k.startswith(INPUT_PREFIX)))
+    unchecked = sum(1 for r in ok if r.get("linear_ok") is False)
     return StudySummary(samples, len(ok), len(failed), verified, spreads,
-                        tuple((r["sample_id"], r.get("error")) for r in failed), inputs)
+                        tuple((r["sample_id"], r.get("error")) for r in failed), inputs,
+                        unchecked)
 
 
 def _primary(rows):
