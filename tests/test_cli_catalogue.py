@@ -226,6 +226,63 @@ CASES = [
      "speed_filter: 2.0 is outside the plausible range [0, 0.05] s"),
     ("axis-speed-filter-negative", lambda t, s: ["modes", axis(t, s, sub(
         "speed_filter = 0.0", "speed_filter = -1.0e-3"))], 1, "speed_filter"),
+    # unit and exponent slips that used to load (each named with its field and the fix)
+    ("axis-lugre-vs-in-mm-per-s", lambda t, s: ["modes", axis(t, s, sub(
+        "vs = 0.01 ", "vs = 10.0 "))], 1,
+     "[friction.lugre] vs: 10 m/s is outside the plausible range [1e-07, 1] m/s of guide-way "
+     "friction; check the value and its unit (m/s, axis totals), e.g. 0.01 m/s, not mm/s"),
+    ("axis-lugre-sigma2-exponent", lambda t, s: ["modes", axis(t, s, sub(
+        "sigma2 = 5578.0 ", "sigma2 = 5.578e12 "))], 1,
+     "[friction.lugre] sigma2: 5.578e+12 N s/m is outside the plausible range"),
+    ("axis-lugre-fs-exponent", lambda t, s: ["modes", axis(t, s, sub(
+        "fs = 6013.0 ", "fs = 6.0e12 "))], 1, "[friction.lugre] fs: 6e+12 N is outside"),
+    ("axis-lugre-misspelt-key", lambda t, s: ["modes", axis(t, s, sub(
+        "sigma2 = 5578.0 ", "sigma2 = 5578.0\nsigma3 = 1.0 "))], 1,
+     "[friction.lugre]: unknown key 'sigma3'; check the spelling; give a named set"),
+    ("axis-viscous-negative-said-once", lambda t, s: ["modes", axis(t, s, sub(
+        "viscous = 5578.0", "viscous = -5578.0"))], 1,
+     "axis.toml: [friction] viscous: -5578.0 is outside the plausible range [0, 1e+10] N s/m;"
+     " check the value and its unit\n"),
+    ("axis-pads-twice", lambda t, s: ["modes", axis(t, s, sub(
+        'pads = ["pad1.x", "pad2.x"]', 'pads = ["pad1.x", "pad1.x"]'))], 1,
+     "[friction] pads: ['pad1.x', 'pad1.x'] names a DOF twice; list each pad's relative-X DOF "
+     "once"),
+    ("axis-stator-is-rotor", lambda t, s: ["compliance", axis(t, s, sub(
+        'stator = "motor.stator"', 'stator = "motor.rotor"'))], 1,
+     "[drive.motor] stator: the same DOF as rotor ('motor.rotor'): the torque acts between "
+     "the two, so it would cancel"),
+    ("axis-inductance-in-mh", lambda t, s: ["bode", axis(t, s, sub(
+        "inductance = 3.0e-3", "inductance = 3.0"))], 1,
+     "[drive.motor] inductance: L / R = 3 H / 0.4 ohm = 7.5 s: an electrical time constant "
+     "above 1 s no servo motor has (data sheets give 1 to 50 ms); check the units: inductance "
+     "in H (3 mH = 3.0e-3)"),
+    ("axis-ratio-lead-in-m-per-rad", lambda t, s: ["compliance", axis(t, s, sub(
+        "ratio = 0.0015915494309189536", "ratio = 1.5915494309189536"))], 1,
+     "[drive.transmission] ratio: speed_max_rpm x ratio = 500 m/s at the slide, past any "
+     "machine tool (20 m/s); give the ratio in m/rad: lead / (2 pi) / belt ratio"),
+    ("axis-current-ti-in-ms", lambda t, s: ["bode", axis(t, s, sub(
+        "ti = 2.0e-3 ", "ti = 2.0 "))], 1,
+     "[drive.current_loop] ti: 2.0 is outside the plausible range [1e-07, 1] s"),
+    ("axis-velocity-ti-in-ms", lambda t, s: ["bode", axis(t, s, sub(
+        "ti = 12.0e-3 ", "ti = 12.0 "))], 1,
+     "[drive.velocity_loop] ti: 12.0 is outside the plausible range [1e-07, 10] s"),
+    ("axis-velocity-loop-key-names-section", lambda t, s: ["modes", axis(t, s, sub(
+        "kp = 3.7 ", "kp = 3.7\ntn = 0.01 "))], 1,
+     "[drive.velocity_loop]: unknown keys ['tn']"),
+    ("axis-feedforward-in-percent", lambda t, s: ["bode", axis(t, s, sub(
+        "# [drive.feedforward]", "[drive.feedforward]\nvelocity = 100.0"))], 1,
+     "[drive.feedforward] velocity: 100.0 is outside the plausible range [0, 2]"),
+    ("axis-lowpass-negative", lambda t, s: ["bode", axis(t, s, sub(
+        "# [drive.filters]", "[drive.filters]\nlowpass_hz = -800.0"))], 1,
+     "[drive.filters] lowpass_hz: got -800.0; give a positive value"),
+    ("axis-lowpass-above-nyquist", lambda t, s: ["modes", axis(t, s, sub(
+        "# [drive.filters]", "[drive.filters]\nlowpass_hz = 8000.0"))], 1,
+     "[drive.filters] lowpass_hz: 8000 Hz is at or above half the current controller's "
+     "sample rate (4000 Hz, [drive.sampling] current_period = 0.000125 s)"),
+    ("axis-notch-above-nyquist", lambda t, s: ["modes", axis(t, s, sub(
+        "# [drive.filters]", "[drive.filters]\nnotch_hz = 5000.0"))], 1,
+     "[drive.filters] notch_hz: 5000 Hz is at or above half the current controller's sample "
+     "rate (4000 Hz"),
     ("axis-immersion-underflow", lambda t, s: ["tune", axis(t, s, sub(
         "radial_immersion = 0.5", "radial_immersion = 2.4e-197"))], 1,
      "[cutting] radial_immersion"),

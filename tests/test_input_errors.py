@@ -193,3 +193,63 @@ def test_without_a_drive_any_law_tunes_the_viscous_pads(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["friction_law"] == "viscous"
     assert out["design"]["c"] == pytest.approx(4.912e5, rel=1e-3)
+
+
+def _every_sample_fails(settings, sample):
+    """A study task whose every sample fails (as an unstable loop or a refused axis would)."""
+    return {"sample_id": int(sample["sample_id"]), "key": sample["key"], "axis": "ax",
+            "status": "failed", "error": "RuntimeError: the closed loop is unstable",
+            "time_s": 0.0, "worker": "here"}
+
+
+def test_a_study_whose_every_sample_failed_exits_1_and_says_so(tmp_path, capsys, monkeypatch):
+    """Two samples, both failed: exit status 1 (not 0), the counts say 0 done and 2 failed,
+    one error line names the count, the first reason and where the rows are, and the one
+    JSON object says status "failed" with exit_status 1; the rows stay for a look."""
+    import functools
+    import sys
+
+    import cloudpickle
+
+    import servotune.study
+    from servotune.study import runner
+
+    write_template(tmp_path / "ax")
+    study = tmp_path / "s.toml"
+    study.write_text('[study]\nname = "s"\naxes = ["ax"]\ncompute = ["compliance"]\n'
+                     'samples = 2\nseed = 0\n[vary."friction.lugre.fc"]\n'
+                     'distribution = "uniform"\nlow = 0.9\nhigh = 1.1\nrelative = true\n')
+    monkeypatch.setattr(servotune.study, "run_study",
+                        functools.partial(runner.run_study, task=_every_sample_fails))
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    try:
+        args = ["study", str(study), "--workers", "1", "--out", str(tmp_path / "out"),
+                "--no-plots"]
+        assert main(args) == 1
+        captured = capsys.readouterr()
+        assert captured.out.startswith("study s: 2 of 2 samples run: 0 done, 2 failed\n")
+        assert ("servotune study: error: all 2 samples failed, so the study has no result "
+                "(sample 0: RuntimeError: the closed loop is unstable); the reasons are in "
+                ) in captured.err
+        assert "study_s/results.parquet" in captured.err
+        assert main([*args, "--json"]) == 1  # all done before: still no result
+        out = json.loads(capsys.readouterr().out)
+    finally:
+        cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+    assert out["status"] == "failed" and out["exit_status"] == 1
+    assert (out["summary"]["done"], out["summary"]["failed"]) == (0, 2)
+
+
+def test_study_counts_name_the_samples_whose_design_fails_its_checks():
+    """Rows done but with a design that fails its linear checks (an unstable loop: no peak)
+    are counted apart, not passed off as plain "done"."""
+    from servotune.study import summarise
+
+    rows = [{"sample_id": 0, "status": "done", "linear_ok": False},
+            {"sample_id": 1, "status": "done", "linear_ok": True},
+            {"sample_id": 2, "status": "failed", "error": "ValueError: x"}]
+    s = summarise(rows, 3)
+    assert s.counts() == ("3 of 3 samples run: 2 done (1 with a design that fails its linear "
+                          "checks), 1 failed")
+    assert s.to_dict()["linear_checks_failed"] == 1
+    assert summarise(rows[1:], 2).counts() == "2 of 2 samples run: 1 done, 1 failed"
