@@ -253,3 +253,25 @@ def test_study_counts_name_the_samples_whose_design_fails_its_checks():
                           "checks), 1 failed")
     assert s.to_dict()["linear_checks_failed"] == 1
     assert summarise(rows[1:], 2).counts() == "2 of 2 samples run: 1 done, 1 failed"
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["lobes", "--mode", "922", "0.011", "1.34e6", "--teeth", "0"],
+     "argument --teeth: '0' is not accepted: give a whole number from 1 to 100"),
+    (["nlcompliance", "AXIS"], "the following arguments are required: --force-pp"),
+    (["modes", "AXIS", "--no-plots"], "--no-plots: servotune modes writes no figures"),
+    (["twomass", "--m1", "nan"], "argument --m1"),
+])
+def test_a_usage_error_is_one_json_object_under_json(tmp_path, capsys, argv, words):
+    """A flag argparse refuses: exit 2, its usage message on standard error and, with --json,
+    the same message as the one JSON object on standard output (error_kind "usage")."""
+    axis = str(Path(__file__).resolve().parents[1] / "models" / "paper_x_axis")
+    argv = [axis if a == "AXIS" else a for a in argv]
+    code = main([*argv, "--json"])
+    captured = capsys.readouterr()
+    assert code == 2
+    out = json.loads(captured.out)
+    assert out == {"command": f"servotune {argv[0]}", "status": "error", "error_kind": "usage",
+                   "error": out["error"], "exit_status": 2}
+    assert words in out["error"] and out["error"] in captured.err
+    assert main(argv) == 2 and capsys.readouterr().out == ""  # without --json: no JSON

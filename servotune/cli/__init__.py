@@ -55,6 +55,18 @@ def _module(name: str):
     return importlib.import_module(f"{__name__}.{name}")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose usage error keeps its message on the exit (``usage_message``),
+    so that under ``--json`` it becomes the command's one JSON object too."""
+
+    def error(self, message):
+        try:
+            super().error(message)
+        except SystemExit as exc:
+            exc.usage_message = message
+            raise
+
+
 def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
     """Return the argument parser.
 
@@ -71,7 +83,7 @@ def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
     """
     from .. import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="servotune",
         description="Design machine-tool feed axes where servo drive, guide-way friction and "
                     "structure interact (Bianchi et al., Procedia CIRP 21, 2014).",
@@ -176,6 +188,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a usage error (already printed)
+        message = getattr(exc, "usage_message", None)
+        if message is not None and "--json" in argv:
+            command = _chosen(argv)
+            label = "servotune" + (f" {command}" if command else "")
+            _json_error(argparse.Namespace(json=True), label, "usage", message, status=2)
         return exc.code if isinstance(exc.code, int) else 2
     if not getattr(args, "func", None):
         parser.print_usage(sys.stderr)
