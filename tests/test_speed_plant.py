@@ -14,7 +14,7 @@ References, best first:
   ``servotune bode --contact stiction``. The tolerance is the grid's: the margins are
   interpolated between lines, so the same model loop on the measurement's lines (the
   ``model`` entry of the JSON) and on ``bode``'s 8001 log-spaced points differs by the
-  grid's share; the measured margins must lie within twice that (plus 1e-4 relative for the
+  grid's share; the measured margins must lie within twice that (plus 1e-5 relative for the
   aliases above the last line, seen through the inertia line). A plant 25 % off gives
   margins far outside it.
 """
@@ -152,12 +152,12 @@ def bode(tmp_path_factory):
 
 
 def tolerance(key: str, model_on_lines: dict, reference: dict) -> float:
-    """The grid's share of a margin (twice it), plus 1e-4 relative for the aliases above the
+    """The grid's share of a margin (twice it), plus 1e-5 relative for the aliases above the
     last line."""
     a, b = model_on_lines[key], reference[key]
     if a is None or b is None:
         return 0.0
-    return 2 * abs(a - b) + 1e-4 * abs(b)
+    return 2 * abs(a - b) + 1e-5 * abs(b)
 
 
 def agree(measured: dict, model: dict, reference: dict) -> None:

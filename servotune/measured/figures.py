@@ -202,8 +202,10 @@ def plot_speed_plant(comparison, title: str = "Speed plant and velocity loop") -
     p_mag.set_ylabel("|P| [rad/s/N m]")
     p_mag.set_title(f"Speed plant: motor speed / motor torque ({comparison.contact.kind} "
                     "guide ways)", fontsize="medium")
-    loops = [(comparison.l_measured, "-", "0.2", 2.5, 0.45,
-              "on the measured plant: " + _margins_label(comparison.measured_loop))]
+    poles = comparison.measured_unstable_poles
+    verdict = (_margins_label(comparison.measured_loop) if not poles
+               else f"unstable ({poles} closed-loop poles by the Nyquist criterion)")
+    loops = [(comparison.l_measured, "-", "0.2", 2.5, 0.45, "on the measured plant: " + verdict)]
     if comparison.model_loop is not None:
         loops.append((comparison.l_model, "--", "tab:blue", 1.3, 1.0,
                       "on the model: " + _margins_label(comparison.model_loop)))

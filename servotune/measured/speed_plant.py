@@ -81,8 +81,9 @@ def model_speed_plant(structure: ModalModel, drive: Drive, omega, contact: Conta
                       pads=()) -> np.ndarray:
     """Return the model's speed plant, motor speed over motor torque, at ``omega``.
 
-    The torque acts between rotor and stator as the motor's does (:func:`servotune.plant.
-    motor_port`), the speed is the rotor's minus the stator's, the winding plays no part:
+    The torque acts between rotor and stator as the motor's does (``motor_port`` of
+    :mod:`servotune.plant`), the speed is the rotor's minus the stator's, the winding plays no
+    part:
     ``P = H_Omega,u / H_T,u``, the speed and the torque per winding voltage of the open plant
     (:func:`servotune.plant.build_open_plant`), whose only path from the voltage to the
     mechanics is the torque.
@@ -283,7 +284,7 @@ def encircled_poles(l_jw) -> int | None:
     0
     """
     l_jw = np.asarray(l_jw, dtype=complex)
-    if abs(l_jw[-1]) >= 0.5 and abs(l_jw[-1].imag) > 1e-6 * abs(l_jw[-1]):
+    if abs(l_jw[-1]) >= 0.5 and abs(l_jw[-1].imag) > 1e-4 * abs(l_jw[-1]):
         return None
     phase = np.unwrap(np.angle(1.0 + l_jw))
     return int(max(0, -round(phase[-1] / math.pi)))
