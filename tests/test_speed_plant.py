@@ -226,3 +226,20 @@ def test_what_the_speed_plant_does_not_take_is_a_usage_error(argv, words, tmp_pa
     path = write_csv(tmp_path / "plant.csv", np.linspace(1, 2, F_HZ.size) / (1j * F_HZ + 1))
     assert main(["identify", str(path), *argv, "--out", str(tmp_path / "out")]) == 2
     assert words in capsys.readouterr().err
+
+
+def test_a_measurement_that_stops_short_of_the_nyquist_frequency_is_flagged():
+    """Lines up to 2 kHz only (the controller's Nyquist frequency is 4 kHz): the phase
+    crossover at 921 Hz is still on the lines and its margin the model's; the contour is closed
+    at 4 kHz through the inertia line, and the output says what the lines do not show."""
+    axis = axis_of("weak_motor_axis")
+    keep = F_HZ <= 2000.0
+    frf = MeasuredFrf(2 * np.pi * F_HZ[keep], speed_plant("weak_motor_axis")[keep],
+                      "speed_per_torque", "short", "short.csv")
+    c = compare_speed_plant(frf, axis.structure, axis.require_drive(),
+                            axis_contact(axis, "stiction"), axis.pads)
+    assert any("ends at 2000 Hz, below the velocity controller's Nyquist frequency 4000 Hz"
+               in w for w in c.warnings)
+    assert c.measured_unstable_poles == 0
+    assert c.measured_loop.gain_margin_db == pytest.approx(c.model_loop.gain_margin_db,
+                                                           abs=1e-4)

@@ -79,10 +79,10 @@ def add_parser(subparsers) -> None:
                     "ratios in [0.001, 0.2]); writes model_update.png and updated_axis/, a copy "
                     "of the axis folder with the updated structure.npz and modal_damping. "
                     "--kind speed-plant reads the drive's measured speed plant (motor speed "
-                    "over motor torque, rad/s/N m) and, with --axis, compares it with the "
-                    "axis' (guide ways in presliding) and closes the velocity loop on it with "
-                    "the axis' drive (PI, current loop, sampling, delays, speed by backward "
-                    "difference): margins, Ms and bandwidth, measured and model; writes "
+                    "over motor torque, rad/s/N m), compares it with the speed plant of the "
+                    "--axis (needed; guide ways in presliding) and closes the velocity loop on "
+                    "it with the axis' drive (PI, current loop, sampling, delays, speed by "
+                    "backward difference): margins, Ms and bandwidth, measured and model; writes "
                     "speed_plant.png. Not yet: --kind closed-loop.")
     p.add_argument("files", nargs="+", metavar="FRF_FILE",
                    help="CSV (f_hz with re,im or mag,phase_deg; '# quantity:' and '# units:' "
