@@ -1546,7 +1546,12 @@ def load_axis(path) -> Axis:
         with open(file, "rb") as handle:
             data = tomllib.load(handle)
     except tomllib.TOMLDecodeError as exc:
-        raise AxisFormatError(f"{file}: not valid TOML ({exc}); fix the syntax") from None
+        hint = ("give the axis folder (the one holding axis.toml)" if file.name != "axis.toml"
+                else "fix the syntax")
+        raise AxisFormatError(f"{file}: not valid TOML ({exc}); {hint}") from None
+    except UnicodeDecodeError:  # a binary file, e.g. the structure.npz beside axis.toml
+        raise AxisFormatError(f"{file}: not an axis description (not a text file); give the "
+                              "axis folder (the one holding axis.toml)") from None
     return axis_from_tables(data, file)
 
 

@@ -361,6 +361,13 @@ CASES = [
         "--boundary", "0", "--n-modes", "2", "--f-max-hz", "100"], 2, "--f-max-hz"),
     ("check-nan-in-matrix", lambda t, s: ["check", npz(t, mass=np.array([[np.nan, 0], [0, 1.]]),
                                                        stiffness=np.eye(2))], 1, "NaN"),
+    ("check-axis-folder-with-dof-map", lambda t, s: ["check", str(PAPER), "--dof-map",
+                                                     text_file(t, "dofs.csv", "name\na.x\n")],
+     2, "--dof-map sets how matrix files are read or reduced; " + str(PAPER)
+     + " is an axis folder, whose [structure] says that"),
+    ("check-axis-folder-with-reduction", lambda t, s: ["check", str(PAPER), "--boundary",
+                                                       "wp.x", "--n-modes", "3"], 2,
+     "--boundary, --n-modes set how matrix files are read or reduced"),
     ("check-f-max-zero", lambda t, s: ["check", str(PAPER), "--f-max-hz", "0"], 2,
      "--f-max-hz"),
     ("check-n-modes-negative", lambda t, s: ["check", str(PAPER), "--n-modes", "-1"], 2,
@@ -392,6 +399,17 @@ CASES = [
     ("frf-nan", lambda t, s: ["lobes", "--frf", frf_csv(
         t, "f_hz,re_xx_m_per_n,im_xx_m_per_n\n100,nan,1e-7\n200,1e-7,-1e-7\n"
            "300,1e-8,-1e-8\n")], 1, "frf.csv"),
+    ("frf-rows-out-of-order", lambda t, s: ["lobes", "--frf", frf_csv(
+        t, "f_hz,re_xx_m_per_n,im_xx_m_per_n\n300,1e-8,-1e-8\n100,1e-7,-1e-7\n"
+           "200,1e-7,-2e-7\n")], 1,
+     "frf.csv: column f_hz: data row 2 has 100 Hz after 300 Hz; the frequencies must be > 0 "
+     "Hz and increase from row to row: sort the rows by f_hz"),
+    ("frf-repeated-frequency", lambda t, s: ["lobes", "--frf", frf_csv(
+        t, "f_hz,re_xx_m_per_n,im_xx_m_per_n\n100,1e-7,-1e-7\n100,1e-7,-1e-7\n"
+           "200,1e-7,-2e-7\n")], 1, "column f_hz: data row 2 has 100 Hz after 100 Hz"),
+    ("frf-negative-frequency", lambda t, s: ["lobes", "--frf", frf_csv(
+        t, "f_hz,re_xx_m_per_n,im_xx_m_per_n\n-100,1e-7,-1e-7\n200,1e-7,-2e-7\n"
+           "300,1e-8,-1e-8\n")], 1, "column f_hz: data row 1 has -100 Hz"),
     ("coordinates-bad-csv", lambda t, s: ["check", str(PAPER), "--coordinates", text_file(
         t, "xyz.csv", "node,x\n1,abc\n")], 1, "xyz.csv"),
 
@@ -427,6 +445,15 @@ CASES = [
     ("lobes-speed-range", lambda t, s: ["lobes", *MODE, "--speed-rpm", "9000", "5000"], 1,
      "--speed-rpm"),
     ("lobes-intervals", lambda t, s: ["lobes", *MODE, "--intervals", "2"], 2, "--intervals"),
+    ("lobes-kt-in-n-per-mm2", lambda t, s: ["lobes", *MODE, "--kt", "2000"], 2,
+     "argument --kt: '2000' is not accepted: give a number in [100000, 1e+11] N/m^2"),
+    ("bode-abbreviated-flag", lambda t, s: ["bode", str(PAPER), "--freq", "10"], 2,
+     "unrecognized arguments: --freq 10"),
+    ("modes-axis-is-the-npz", lambda t, s: ["modes", str(Path(axis(t, s)) / "structure.npz")],
+     1, "structure.npz: not an axis description (not a text file); give the axis folder"),
+    ("modes-axis-is-a-text-file", lambda t, s: ["modes", text_file(t, "notes.txt", "hello")],
+     1, "notes.txt: not valid TOML (Expected '=' after a key in a key/value pair (at end of "
+        "document)); give the axis folder (the one holding axis.toml)"),
     ("lobes-no-compliance", lambda t, s: ["lobes"], 2, "give the compliance"),
     ("lobes-two-sources", lambda t, s: ["lobes", str(PAPER), *MODE], 2, "one source"),
     ("table3-workers", lambda t, s: ["table3", "--workers", "0"], 2, "--workers"),
@@ -499,6 +526,15 @@ CASES = [
                                           "localhost:8786"], 2, "tcp://"),
     ("study-workers-zero", lambda t, s: ["study", str(t / "s.toml"), "--workers", "0"], 2,
      "--workers"),
+    ("study-design-inline", lambda t, s: ["study", text_file(
+        t, "s.toml", f'[study]\naxes = ["{s}"]\ncompute = ["compliance"]\n'
+                     'design = {c = 5578.0, kv = 25.0, kp = 5.0, ti = 0.01}\n')], 1,
+     "[study] design: got {'c': 5578.0, 'kv': 25.0, 'kp': 5.0, 'ti': 0.01}; name the "
+     "results.json that servotune tune wrote"),
+    ("study-design-negative-c", lambda t, s: ["study", text_file(
+        t, "s.toml", f'[study]\naxes = ["{s}"]\ncompute = ["compliance"]\n'
+                     f'design = "{design_file(t, c=-1.0)}"\n')], 1,
+     "results.json: design.c is -1.0; give a finite number > 0"),
     ("verify-missing-file", lambda t, s: ["verify", str(t / "results.json")], 1,
      "results.json"),
     ("verify-not-json", lambda t, s: ["verify", text_file(t, "r.json", "{not json")], 1,

@@ -275,3 +275,18 @@ def test_a_usage_error_is_one_json_object_under_json(tmp_path, capsys, argv, wor
                    "error": out["error"], "exit_status": 2}
     assert words in out["error"] and out["error"] in captured.err
     assert main(argv) == 2 and capsys.readouterr().out == ""  # without --json: no JSON
+
+
+def test_an_axis_named_by_its_axis_toml_is_the_same_axis_as_its_folder(tmp_path, capsys):
+    """modes on the folder, then on its axis.toml, then on the folder: one axis, so each run
+    replaces its own results (it used to be refused as 'another axis of the same name')."""
+    folder = _starter(tmp_path)
+    out = ["--out", str(tmp_path / "out")]
+    for target in (folder, folder / "axis.toml", folder):
+        assert main(["modes", str(target), *out]) == 0, capsys.readouterr().err
+    assert "another axis" not in capsys.readouterr().err
+    other = tmp_path / "other" / "ax"
+    other.parent.mkdir()
+    write_template(other)  # the same [axis] name as the first
+    assert main(["modes", str(other / "axis.toml"), *out]) == 1  # a different axis: refused
+    assert "another axis of the same name" in capsys.readouterr().err

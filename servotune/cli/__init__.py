@@ -57,7 +57,12 @@ def _module(name: str):
 
 class _Parser(argparse.ArgumentParser):
     """argparse's parser whose usage error keeps its message on the exit (``usage_message``),
-    so that under ``--json`` it becomes the command's one JSON object too."""
+    so that under ``--json`` it becomes the command's one JSON object too. Flags are not
+    abbreviated: a mistyped ``--freq`` is refused, not taken for ``--frequency-hz``."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         try:

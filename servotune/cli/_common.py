@@ -495,7 +495,10 @@ class RunOutput:
         self.name = f"{safe_name(command)}_{safe_name(subject)}"
         self.path = self.out / self.name
         self.files = tuple(files)
-        self.source = None if source is None else str(Path(source).resolve())
+        if source is not None:  # an axis given by its axis.toml is the same axis as its folder
+            source = Path(source).resolve()
+            source = source.parent if source.name == "axis.toml" and source.is_file() else source
+        self.source = None if source is None else str(source)
         self.committed = False
         self.check()
 

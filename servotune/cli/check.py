@@ -98,6 +98,16 @@ def _check_axis(args, coords, progress):
     from ..structure.coverage import mode_coverage
     from ..structure.reduction_check import reduction_check
 
+    ignored = [flag for flag, value in (
+        ("--dof-map", args.dof_map), ("--ports", args.ports), ("--mass-name", args.mass_name),
+        ("--stiffness-name", args.stiffness_name), ("--boundary", args.boundary),
+        ("--n-modes", args.n_modes), ("--f-max-hz", args.f_max_hz)) if value is not None]
+    if ignored:
+        verb = "set" if len(ignored) > 1 else "sets"
+        raise UsageError(f"{', '.join(ignored)} {verb} how matrix files are read or reduced; "
+                         f"{args.matrices[0]} is an axis folder, whose [structure] says that "
+                         "(dof_map, ports, mass_name, stiffness_name, reduce): drop "
+                         f"{'them' if len(ignored) > 1 else 'it'}, or give the matrix files")
     with progress.task(f"loading {args.matrices[0]}"):
         axis = load_axis(args.matrices[0])
     band = _band(args, axis)

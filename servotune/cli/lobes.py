@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import warnings
 from pathlib import Path
 
@@ -35,8 +36,9 @@ DEFAULT_INTERVALS = None  # servotune.chatter.sdm.DEFAULT_INTERVALS (tests check
 MM = 1e-3
 
 _TEETH = number(1, 100, integer=True, example=4)
-_COEFFICIENT = number(0.0, 1e12, low_open=True, example="6e8", unit="N/m^2")
-_NORMAL = number(0.0, 1e12, example="2e8", unit="N/m^2")
+# the plausible ranges of [cutting] kt and kn in an axis file (a unit slip: N/mm^2)
+_COEFFICIENT = number(1e5, 1e11, example="6e8", unit="N/m^2")
+_NORMAL = number(0.0, 1e11, example="2e8", unit="N/m^2")
 _IMMERSION = number(0.0, 1.0, low_open=True, example=0.5)
 _RPM = number(0.0, 1e6, low_open=True, example=12000, unit="rpm")
 _SPEEDS = number(2, 100_000, integer=True, example=2000)
@@ -148,11 +150,34 @@ def _compliance(args):
         args.direction = d
         return frd, f"{axis.name}: closed-loop wp.{d} compliance with {contact.note}", axis
     if args.frf:
-        return chatter.read_frf_csv(args.frf), f"measured FRF {args.frf}", None
+        return _read_frf(args.frf), f"measured FRF {args.frf}", None
     if not modes:
         raise UsageError("give the compliance: AXIS, --mode FN_HZ ZETA K_N_PER_M (repeatable) "
                          "or --frf FILE.csv")
     return chatter.modal_compliance(modes), f"{len(modes)} mode(s)", None
+
+
+def _read_frf(path):
+    """The measured FRF of ``--frf``; frequencies out of order or not > 0 said in the file's
+    terms (column f_hz, its data row, Hz)."""
+    import re
+
+    from .. import chatter
+
+    try:
+        return chatter.read_frf_csv(path)
+    except ValueError as exc:
+        text = str(exc)
+        found = re.findall(r"got (\S+?)(?: then (\S+))? \(at index", text)
+        if not text.startswith("omega must") or not found:
+            raise
+        values = [float(v) / (2.0 * math.pi) for v in found[0] if v]
+        row = int(re.search(r"at index (\d+)", text).group(1)) + 1
+        where = (f"data row {row} has {values[1]:.6g} Hz after {values[0]:.6g} Hz"
+                 if len(values) == 2 else f"data row {row} has {values[0]:.6g} Hz")
+        raise ValueError(f"{path}: column f_hz: {where}; the frequencies must be > 0 Hz and "
+                         "increase from row to row: sort the rows by f_hz and drop repeated "
+                         "frequencies") from None
 
 
 def _setup(args, axis):

@@ -387,7 +387,12 @@ def load_study(path, check_axes: bool = True) -> Study:
             raise _err(file, "[study] chatter_weight", f"{weight!r}", "give a number in [0, 1]")
     design = design_file = None
     if "design" in head:
-        design_file = str((file.parent / str(head["design"])).resolve())
+        if not isinstance(head["design"], str):
+            raise _err(file, "[study] design", f"got {head['design']!r}",
+                       'name the results.json that servotune tune wrote, e.g. design = '
+                       '"out/tune_myaxis/results.json" (the design is read from it, not '
+                       "written here)")
+        design_file = str((file.parent / head["design"]).resolve())
         design = _read_design(design_file, file)
         if "tune" in compute:
             raise _err(file, "[study] design", "given together with compute = tune",
@@ -422,6 +427,14 @@ def _read_design(path: str, file) -> dict:
         raise _err(file, "[study] design", f"{path} has no 'design' with c, kv, kp, ti",
                    "name the results.json that servotune tune wrote")
     out = {k: design.get(k) for k in ("c", "kv", "kp", "ti")}
+    for key, value in out.items():  # checked here, not in every sample (each would fail)
+        if key == "ti" and value is None:
+            continue  # no integral action: tune writes an infinite Ti as null
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not math.isfinite(value) or value <= 0):
+            raise _err(file, "[study] design", f"{path}: design.{key} is {value!r}",
+                       "give a finite number > 0 (SI, as servotune tune writes it), or name "
+                       "another results.json")
     out.update({k: design[k] for k in ("notch_frequency", "notch_width", "notch_depth",
                                        "lowpass_frequency")
                 if design.get(k) is not None})
