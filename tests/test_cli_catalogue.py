@@ -391,6 +391,17 @@ CASES = [
                                            "mu=0.1"], 1, "mu"),
     ("fit-fix-nan", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix", "delta=nan"],
      1, "finite"),
+    ("fit-fix-negative-vs", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix",
+                                          "vs=-1"], 1,
+     "--fix 'vs=-1': vs must be in [1e-07, 1] m/s; give the value in SI units"),
+    ("fit-fix-zero-delta", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix",
+                                         "delta=0"], 1,
+     "--fix 'delta=0': delta must be in (0, 10]"),
+    ("fit-speeds-in-mm-per-s", lambda t, s: ["friction", "fit", stribeck_csv(
+        t, rows=[(sg * v, sg * (2000.0 + 5.0 * v)) for sg in (1.0, -1.0)
+                 for v in (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)])], 1,
+     "stribeck.csv: column v_m_per_s reaches 1000 m/s, past any guide way (10 m/s); give the "
+     "speeds in m/s"),
     ("fit-fix-without-value", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix",
                                             "delta"], 1, "NAME=VALUE"),
     ("frf-missing-file", lambda t, s: ["lobes", "--frf", str(t / "frf.csv")], 1, "frf.csv"),

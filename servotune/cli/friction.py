@@ -165,6 +165,13 @@ def run(args) -> int:
 
 
 FIXABLE = ("fc", "fs", "vs", "delta", "sigma2")  # the steady-state parameters
+#: the values a fixed parameter may take: (low, high, unit, whether low itself is allowed);
+#: the ranges of an axis file's [friction.lugre] (servotune.axis.LUGRE_RANGES)
+FIX_RANGES = {"fc": (0.0, 1e7, "N", False), "fs": (0.0, 1e7, "N", False),
+              "vs": (1e-7, 1.0, "m/s", True), "delta": (0.0, 10.0, "", False),
+              "sigma2": (0.0, 1e10, "N s/m", True)}
+#: the fastest sliding speed a guide-way measurement can hold [m/s]
+SPEED_MAX = 10.0
 
 
 def _fixed(items) -> dict[str, float]:
@@ -184,6 +191,11 @@ def _fixed(items) -> dict[str, float]:
         if not math.isfinite(number):
             raise ValueError(f"--fix {item!r}: {value!r} is not a finite number; give the value "
                              "in SI units, e.g. --fix delta=1")
+        low, high, unit, closed = FIX_RANGES[name]
+        if not ((number >= low if closed else number > low) and number <= high):
+            span = f"{'[' if closed else '('}{low:g}, {high:g}]" + (f" {unit}" if unit else "")
+            raise ValueError(f"--fix {item!r}: {name} must be in {span}; give the value in SI "
+                             "units, e.g. --fix vs=0.01")
         fixed[name] = number
     return fixed
 
@@ -212,6 +224,12 @@ def run_fit(args) -> int:
     fixed = _fixed(args.fix)
     if fixed and data.kind != "steady_state":
         raise ValueError("--fix applies to steady-state (v, F) data only")
+    if data.kind == "steady_state":
+        fastest = float(abs(data.velocity).max())
+        if fastest > SPEED_MAX:
+            raise ValueError(f"{args.data}: column v_m_per_s reaches {fastest:g} m/s, past any "
+                             f"guide way ({SPEED_MAX:g} m/s); give the speeds in m/s (a value "
+                             "in mm/s divided by 1000)")
     name = "fit_stribeck.png" if data.kind == "steady_state" else "fit_presliding.png"
     names = [] if args.no_plots else [name]
     run_out = RunOutput.for_args(args, "friction_fit", Path(args.data).stem,
