@@ -499,6 +499,10 @@ def compare_speed_plant(measured, structure: ModalModel, drive: Drive, contact: 
         warnings.append(f"the model's velocity loop is unstable ({exc}); the margins on the "
                         "measured plant are those of the same loop")
     notes.append(f"the model's guide ways: {contact.note} (standstill, small excitation)")
+    notes.append("the loop on the measurement is judged stable or not by the Nyquist criterion "
+                 "from its first line to the top, assuming the measured mechanism and the "
+                 "drive's current loop stable on their own and 1 + L not turning below the "
+                 "first line")
     notes.append(f"the bandwidth is taken relative to the closed-loop gain at the first line, "
                  f"{w[0] * HZ_PER_RAD_S:g} Hz (for measured and model alike)")
     if sampled:
