@@ -252,3 +252,19 @@ def test_a_measurement_that_stops_short_of_the_nyquist_frequency_is_flagged():
     assert c.measured_unstable_poles == 0
     assert c.measured_loop.gain_margin_db == pytest.approx(c.model_loop.gain_margin_db,
                                                            abs=1e-4)
+
+
+@pytest.mark.parametrize("content, words", [
+    ("# quantity: receptance\nf_hz,re,im\n1,1e-6,0\n2,1e-6,0\n",
+     "plant.csv, line 1: the file states a receptance, but a speed_per_torque was asked for"),
+    ("f_hz,re,im\n1,1,0\n2,1,0\n3,-1,0\n",
+     "plant.csv: the measured speed plant does not fall as an inertia 1/(j w J)"),
+])
+def test_a_file_that_is_no_speed_plant_is_a_clear_error(content, words, tmp_path, capsys):
+    path = tmp_path / "plant.csv"
+    path.write_text(content)
+    assert main(["identify", str(path), "--kind", "speed-plant", "--axis",
+                 str(MODELS / "weak_motor_axis"), "--no-plots",
+                 "--out", str(tmp_path / "out")]) == 1
+    assert words in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
