@@ -511,7 +511,7 @@ def compare_speed_plant(measured, structure: ModalModel, drive: Drive, contact: 
                      f"every {drive.digital.velocity_period * 1e6:g} us); above the last line "
                      f"({omega[-1] * HZ_PER_RAD_S:g} Hz) the aliases see the measured plant as "
                      f"the inertia line 1/(j w J), J = {response.inertia:.4g} kg m^2")
-        if omega[-1] < nyquist * (1 - 1e-6) * 0.999:
+        if omega[-1] < 0.999 * nyquist:
             warnings.append(f"the measurement ends at {omega[-1] * HZ_PER_RAD_S:g} Hz, below "
                             f"the velocity controller's Nyquist frequency "
                             f"{nyquist * HZ_PER_RAD_S:g} Hz: a phase crossover above it is not "
