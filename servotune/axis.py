@@ -47,6 +47,7 @@ import itertools
 import math
 import re
 import tomllib
+import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -470,7 +471,25 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
                 raise _err(file, "[structure] reduce", f"got {spec!r}",
                            "give reduce = { boundary = [DOF names], n_modes = N } "
                            "(or f_max_hz = F instead of n_modes)")
-            boundary = list(spec["boundary"])
+            boundary = spec["boundary"]
+            if (not isinstance(boundary, list) or not boundary
+                    or not all(isinstance(b, str) for b in boundary)):
+                raise _err(file, "[structure] reduce.boundary", f"got {boundary!r}",
+                           'give a list of DOF names, e.g. boundary = ["pad1.x", "wp.x"]')
+            if "n_modes" in spec and "f_max_hz" in spec:
+                raise _err(file, "[structure] reduce", "both n_modes and f_max_hz are given",
+                           "give one of them")
+            n_modes = spec.get("n_modes")
+            if n_modes is not None and (isinstance(n_modes, bool) or not isinstance(
+                    n_modes, int) or n_modes < 0):
+                raise _err(file, "[structure] reduce.n_modes", f"got {n_modes!r}",
+                           "give a whole number >= 0 of fixed-interface modes (0: static)")
+            f_max = spec.get("f_max_hz")
+            if f_max is not None and (isinstance(f_max, bool) or not isinstance(
+                    f_max, (int, float)) or not math.isfinite(f_max) or f_max <= 0):
+                raise _err(file, "[structure] reduce.f_max_hz", f"got {f_max!r}",
+                           "give the highest fixed-interface mode to keep, in Hz (a number "
+                           "> 0, e.g. 500.0)")
             index = matrices.index(boundary)
             return craig_bampton(matrices.mass, matrices.stiffness, index,
                                  n_modes=spec.get("n_modes"), f_max_hz=spec.get("f_max_hz"),
@@ -515,38 +534,46 @@ def structure_matrices(axis: Axis):
 
 def _read_matrices(table, folder: Path, file: Path):
     """The checked matrices of ``[structure]`` with their DOF names (ports named)."""
+    for name in ("file", "mass", "stiffness", "dof_map"):
+        if name in table and (not isinstance(table[name], str) or not table[name].strip()):
+            raise _err(file, f"[structure] {name}", f"got {table[name]!r}",
+                       'give a file name in quotes, relative to the axis folder, e.g. '
+                       '"structure.npz"')
     if "file" in table:
         if "mass" in table or "stiffness" in table:
             raise _err(file, "[structure]", "both file and mass/stiffness are given",
                        "give either file or mass and stiffness")
-        paths = {"mass": folder / str(table["file"])}
+        paths = {"mass": folder / table["file"]}
         key = "[structure] file"
     elif "mass" in table and "stiffness" in table:
-        paths = {"mass": folder / str(table["mass"]), "stiffness": folder / str(table["stiffness"])}
+        paths = {"mass": folder / table["mass"], "stiffness": folder / table["stiffness"]}
         key = "[structure] mass/stiffness"
     else:
         raise _err(file, "[structure]", "no matrices are named",
                    'add file = "structure.npz" or mass = "M.mtx" and stiffness = "K.mtx"')
-    for p in paths.values():
-        if not p.is_file():
-            raise _err(file, key, f"{p} does not exist",
+    dof_map = folder / table["dof_map"] if "dof_map" in table else None
+    for label, p in ((key, paths["mass"]), (key, paths.get("stiffness")),
+                     ("[structure] dof_map", dof_map)):
+        if p is not None and not p.is_file():
+            raise _err(file, label, f"{p} is a folder, not a file" if p.is_dir() else
+                       f"{p} does not exist",
                        "check the name (paths are relative to the axis folder)")
-    dof_map = folder / str(table["dof_map"]) if "dof_map" in table else None
-    if dof_map is not None and not dof_map.is_file():
-        raise _err(file, "[structure] dof_map", f"{dof_map} does not exist",
-                   "check the name (paths are relative to the axis folder)")
     ports = _ports(table, folder, file)
     names = {}
-    for key in ("mass_name", "stiffness_name"):
-        if key in table:
-            if not isinstance(table[key], str) or not table[key].strip():
-                raise _err(file, f"[structure] {key}", f"got {table[key]!r}",
+    for name in ("mass_name", "stiffness_name"):
+        if name in table:
+            if not isinstance(table[name], str) or not table[name].strip():
+                raise _err(file, f"[structure] {name}", f"got {table[name]!r}",
                            "give the matrix' name inside the file, e.g. \"MHH\"")
-            names[key] = table[key].strip()
+            names[name] = table[name].strip()
     try:
         matrices = read_structure(paths["mass"], paths.get("stiffness"), dof_map, **names)
     except MatrixFileError as exc:
         raise _err(file, key, str(exc), "fix or re-export the matrix files") from None
+    except (OSError, EOFError, zipfile.BadZipFile) as exc:  # a file cut short or not an archive
+        raise _err(file, key, f"cannot read {' + '.join(str(p) for p in paths.values())} "
+                   f"({type(exc).__name__}: {exc})",
+                   "fix or re-export the matrix files") from None
     if ports is not None:
         matrices = _name_ports(matrices, ports, dof_map or paths["mass"], file)
     for label, matrix, limit, unit in (("mass", matrices.mass, 1e9, "kg (or kg m^2)"),

@@ -142,6 +142,32 @@ CASES = [
      "[structure]"),
     ("axis-structure-file-missing", lambda t, s: ["modes", axis(t, s, sub(
         'file = "structure.npz"', 'file = "missing.npz"'))], 1, "missing.npz"),
+    ("axis-structure-npz-empty", lambda t, s: ["modes", _structure_bytes(t, s, b"")], 1,
+     "axis.toml: [structure] file: cannot read "),
+    ("axis-structure-npz-cut-short", lambda t, s: ["modes", _structure_bytes(
+        t, s, (s / "structure.npz").read_bytes()[:300])], 1,
+     "[structure] file: cannot read"),
+    ("axis-structure-npz-not-square", lambda t, s: ["modes", _structure_arrays(
+        t, s, mass=lambda m: m[:, :-1])], 1,
+     "axis.toml: [structure] file: "),
+    ("axis-structure-file-is-a-folder", lambda t, s: ["modes", axis(t, s, sub(
+        'file = "structure.npz"', 'file = "."'))], 1, "is a folder, not a file"),
+    ("axis-structure-file-a-number", lambda t, s: ["modes", axis(t, s, sub(
+        'file = "structure.npz"', 'file = 5'))], 1,
+     "[structure] file: got 5; give a file name in quotes"),
+    ("axis-reduce-boundary-a-string", lambda t, s: ["modes", _fe_axis(
+        t, s, 'boundary = "wp.x"\nn_modes = 0')], 1,
+     '[structure] reduce.boundary: got \'wp.x\'; give a list of DOF names'),
+    ("axis-reduce-f-max-text", lambda t, s: ["modes", _fe_axis(
+        t, s, 'boundary = ["pad1.x", "pad2.x", "wp.x", "motor.rotor", "motor.stator"]\n'
+              'f_max_hz = "500"')], 1, "[structure] reduce.f_max_hz: got '500'"),
+    ("axis-reduce-n-modes-negative", lambda t, s: ["modes", _fe_axis(
+        t, s, 'boundary = ["pad1.x", "pad2.x", "wp.x", "motor.rotor", "motor.stator"]\n'
+              'n_modes = -1')], 1, "[structure] reduce.n_modes: got -1; give a whole number"),
+    ("axis-reduce-two-cutoffs", lambda t, s: ["modes", _fe_axis(
+        t, s, 'boundary = ["pad1.x", "pad2.x", "wp.x", "motor.rotor", "motor.stator"]\n'
+              'n_modes = 1\nf_max_hz = 500.0')], 1,
+     "[structure] reduce: both n_modes and f_max_hz are given; give one of them"),
     ("axis-misspelt-key", lambda t, s: ["modes", axis(t, s, sub(
         "torque_constant = 1.2", "torque_konstant = 1.2"))], 1, "torque_konstant"),
     ("axis-negative-torque-constant", lambda t, s: ["modes", axis(t, s, sub(
@@ -656,6 +682,34 @@ def _heavy(tmp, starter) -> str:
     data = np.load(folder / "structure.npz")
     np.savez(folder / "structure.npz", mass=data["mass"] * 1e300, stiffness=data["stiffness"],
              dofs=data["dofs"])
+    return str(folder)
+
+
+def _structure_bytes(tmp, starter, data: bytes) -> str:
+    folder = Path(axis(tmp, starter, sub("modal_damping = 0.03", "modal_damping = 0.02")))
+    (folder / "structure.npz").write_bytes(data)
+    return str(folder)
+
+
+def _structure_arrays(tmp, starter, **change) -> str:
+    folder = Path(axis(tmp, starter, sub("modal_damping = 0.03", "modal_damping = 0.02")))
+    data = dict(np.load(folder / "structure.npz"))
+    np.savez(folder / "structure.npz", **{k: change[k](v) if k in change else v
+                                          for k, v in data.items()})
+    return str(folder)
+
+
+def _fe_axis(tmp, starter, reduce: str) -> str:
+    """The starter axis as FE matrices (M.mtx, K.mtx, dofs.csv) with [structure.reduce]."""
+    from scipy.io import mmwrite
+
+    folder = Path(axis(tmp, starter, lambda text: text.replace(
+        'file = "structure.npz"', 'mass = "M.mtx"\nstiffness = "K.mtx"\ndof_map = "dofs.csv"'
+    ).replace("[friction]", f"[structure.reduce]\n{reduce}\n\n[friction]", 1)))
+    data = np.load(folder / "structure.npz")
+    mmwrite(str(folder / "M.mtx"), data["mass"])
+    mmwrite(str(folder / "K.mtx"), data["stiffness"])
+    (folder / "dofs.csv").write_text("name\n" + "\n".join(data["dofs"]) + "\n")
     return str(folder)
 
 
