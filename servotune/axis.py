@@ -1643,6 +1643,13 @@ def axis_from_tables(data: dict, file) -> Axis:
                         "budget is not checked")
     operation = _operation(data, drive, friction, cutting, requirements, file, defaults)
     tuning = _tuning(data, file)
+    kv_high = dict(tuning.bounds).get("kv", (None, None))[1]
+    if kv_high is not None and requirements.kv_min > kv_high:
+        raise _err(file, "[requirements] kv_min", f"the least Kv {requirements.kv_min:.4g} 1/s "
+                   f"({requirements.kv_min * 60e-3:.4g} (m/min)/mm) is above the largest Kv "
+                   f"the tuning may choose, [tuning] kv = {kv_high:.4g} 1/s", "lower kv_min "
+                   "(kv_min_m_per_min_per_mm is in (m/min)/mm: 1.0 is 16.67 1/s) or raise the "
+                   "upper bound of [tuning] kv")
     variation = _friction_variation(data, friction, tuning, file,
                                     defaults if drive is not None else [])
     if variation:

@@ -309,6 +309,10 @@ CASES = [
         "# [drive.filters]", "[drive.filters]\nnotch_hz = 5000.0"))], 1,
      "[drive.filters] notch_hz: 5000 Hz is at or above half the current controller's sample "
      "rate (4000 Hz"),
+    ("axis-kv-min-above-the-tuning-bound", lambda t, s: ["modes", axis(t, s, sub(
+        "# kv_min_m_per_min_per_mm = 1.0", "kv_min_m_per_min_per_mm = 100.0"))], 1,
+     "[requirements] kv_min: the least Kv 1667 1/s (100 (m/min)/mm) is above the largest Kv "
+     "the tuning may choose, [tuning] kv = 300 1/s; lower kv_min"),
     ("axis-immersion-underflow", lambda t, s: ["tune", axis(t, s, sub(
         "radial_immersion = 0.5", "radial_immersion = 2.4e-197"))], 1,
      "[cutting] radial_immersion"),
