@@ -290,3 +290,28 @@ def test_an_axis_named_by_its_axis_toml_is_the_same_axis_as_its_folder(tmp_path,
     write_template(other)  # the same [axis] name as the first
     assert main(["modes", str(other / "axis.toml"), *out]) == 1  # a different axis: refused
     assert "another axis of the same name" in capsys.readouterr().err
+
+
+def test_ctrl_c_under_json_is_one_json_object(tmp_path, capsys, monkeypatch):
+    """Interrupted under --json (a command, and a study before its first sample): exit 130,
+    the one line on standard error and the same line as the one JSON object on standard
+    output (error_kind "interrupted"), as for every other end of a command."""
+    import servotune.cli.twomass
+    import servotune.study
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(servotune.cli.twomass, "run", interrupted)
+    monkeypatch.setattr(servotune.study, "run_study", interrupted)
+    write_template(tmp_path / "ax")
+    study = tmp_path / "s.toml"
+    study.write_text('[study]\nname = "s"\naxes = ["ax"]\ncompute = ["compliance"]\n')
+    for argv in (["twomass"], ["study", str(study), "--out", str(tmp_path / "out")]):
+        assert main([*argv, "--json"]) == 130
+        captured = capsys.readouterr()
+        out = json.loads(captured.out)
+        assert out["error_kind"] == "interrupted" and out["exit_status"] == 130
+        assert out["error"] == captured.err.strip()
+        assert out["error"].startswith(f"servotune {argv[0]}: interrupted")
+        assert "nothing was written" in out["error"]

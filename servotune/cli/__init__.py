@@ -149,9 +149,9 @@ def _interrupted(label: str, args, what: str | None) -> int:
     run = getattr(args, "run_output", None)
     done = (f"the results in {run.path} were written before" if run is not None
             and run.committed else "nothing was written")
-    print(f"{label}: interrupted" + (f" during {what}" if what else "") + f"; {done}",
-          file=sys.stderr)
-    return EXIT_INTERRUPTED
+    line = f"{label}: interrupted" + (f" during {what}" if what else "") + f"; {done}"
+    print(line, file=sys.stderr)
+    return _json_error(args, label, "interrupted", line, status=EXIT_INTERRUPTED)
 
 
 #: BLAS/OpenMP thread counts the command sets when the user has not (see :func:`main`)

@@ -68,7 +68,8 @@ def _state(folder, keys) -> tuple[bool, int]:
     return (folder / "study.json").is_file(), len(rows & keys)
 
 
-def _interrupted(what: str | None, folder, keys, before: tuple[bool, int]) -> int:
+def _interrupted(what: str | None, folder, keys, before: tuple[bool, int],
+                 json: bool = False) -> int:
     """Print the one line of an interrupted study: what is in its folder now, truthfully."""
     import sys
 
@@ -92,8 +93,12 @@ def _interrupted(what: str | None, folder, keys, before: tuple[bool, int]) -> in
         kept = (f"{folder} keeps study.json and the rows of {rows} of {len(keys)} samples "
                 f"in rows/ ({new} finished in this run); the same command goes on from them, "
                 "'servotune tune --spread-from' reads them")
-    print("servotune study: interrupted" + (f" during {what}" if what else "") + f"; {kept}",
-          file=sys.stderr)
+    line = "servotune study: interrupted" + (f" during {what}" if what else "") + f"; {kept}"
+    print(line, file=sys.stderr)
+    if json:  # the one JSON object, as for any other end of the command
+        print_json({"command": "servotune study", "status": "error",
+                    "error_kind": "interrupted", "error": line,
+                    "exit_status": EXIT_INTERRUPTED})
     return EXIT_INTERRUPTED
 
 
@@ -150,7 +155,7 @@ def run(args) -> int:
                 raise
         summary, files = write_summary(study, result, plots=not args.no_plots)
     except KeyboardInterrupt:
-        return _interrupted(what, folder, keys, before)
+        return _interrupted(what, folder, keys, before, json=args.json)
     all_failed = summary.finished > 0 and summary.failed == summary.finished
     status = 1 if all_failed else 0
     out = {"study": study.name, "folder": str(result.folder),
