@@ -1296,6 +1296,10 @@ def _operation(data, drive, friction, cutting, requirements, file, defaults
                 raise _err(file, "[operation] feed_speeds", f"{v!r} is outside the plausible "
                            "range [1e-06, 10] m/s", "give speeds in m/s (1 m/min = 0.01667 m/s)")
         kwargs["feed_speeds"] = tuple(float(v) for v in speeds)
+        if not speeds:
+            defaults.append("[operation] feed_speeds = []: no feeding regime, the axis is "
+                            "judged standing only (leave feed_speeds out to take them from "
+                            "[cutting])")
     elif cutting is not None and cutting.direction == "x":
         kwargs["feed_speeds"] = cutting.feed_speeds()
         lo, hi = kwargs["feed_speeds"]
@@ -1495,16 +1499,44 @@ _REQUIREMENT_RANGES = {"ms_velocity_max": (1.0, 100.0, ""), "ms_position_max": (
                        "depth_required": (1e-7, 1.0, "m")}
 
 
+def _declared_settings(file) -> dict:
+    """The settings the installed requirements declare (loads the requirement plug-ins)."""
+    from .plugins import PluginError
+    from .tuning.constraint import declared_settings
+
+    try:
+        return declared_settings()
+    except PluginError as exc:
+        raise _err(file, "[requirements]", f"a requirement plug-in is broken: {exc}",
+                   "fix or uninstall the plug-in it names") from None
+
+
 def _requirements(data, file) -> Requirements:
     ratios = ("bandwidth_ratio_min", "current_bandwidth_ratio_min", "ti_bandwidth_min",
               "ti_bandwidth_max")
     keys = ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg", "gain_margin_min_db",
             "kv_min", "kv_min_m_per_min_per_mm", "band_hz", "loop_band_hz", "depth_required",
             "thrust_margin", "nonlinear_tolerance", *ratios)
-    table = _table(data, "requirements", file, (), keys)
+    given = data.get("requirements")
+    declared = {}
+    if isinstance(given, dict) and set(given) - set(keys):
+        # keys servotune does not know may be settings of installed requirement plug-ins
+        declared = _declared_settings(file)
+    table = _table(data, "requirements", file, (), (*keys, *declared))
     if table is None:
         return Requirements()
     kwargs = {}
+    settings = {}
+    for key, (setting, owner) in declared.items():
+        if key in table:
+            try:
+                settings[key] = setting.parse(table[key])
+            except ValueError as exc:
+                raise _err(file, f"[requirements] {key}", str(exc),
+                           f"give a number in [{setting.low:g}, {setting.high:g}] "
+                           f"{setting.unit} (a setting of the requirement {owner!r})") from None
+    if settings:
+        kwargs["settings"] = settings
     for key in ("ms_velocity_max", "ms_position_max", "phase_margin_min_deg",
                 "gain_margin_min_db", "kv_min", "depth_required"):
         if key in table:
@@ -1650,6 +1682,14 @@ def axis_from_tables(data: dict, file) -> Axis:
                    f"the tuning may choose, [tuning] kv = {kv_high:.4g} 1/s", "lower kv_min "
                    "(kv_min_m_per_min_per_mm is in (m/min)/mm: 1.0 is 16.67 1/s) or raise the "
                    "upper bound of [tuning] kv")
+    c_low = dict(tuning.bounds).get("c", (None, None))[0]
+    lugre = getattr(getattr(friction, "law", None), "lugre_parameters", None)
+    if drive is not None and c_low is not None and lugre is not None and c_low < lugre.sigma2:
+        raise _err(file, "[tuning] c", f"the lower bound {c_low:g} N s/m is below the guide "
+                   f"ways' own viscous friction sigma2 = {lugre.sigma2:g} N s/m ([friction."
+                   "lugre]): C is the total guide-way damping, so damping can be added to "
+                   "sigma2 but not taken from it", f"give a lower bound >= {lugre.sigma2:g} "
+                   "N s/m, or leave c out (then it starts at sigma2)")
     variation = _friction_variation(data, friction, tuning, file,
                                     defaults if drive is not None else [])
     if variation:

@@ -313,6 +313,10 @@ CASES = [
         "# kv_min_m_per_min_per_mm = 1.0", "kv_min_m_per_min_per_mm = 100.0"))], 1,
      "[requirements] kv_min: the least Kv 1667 1/s (100 (m/min)/mm) is above the largest Kv "
      "the tuning may choose, [tuning] kv = 300 1/s; lower kv_min"),
+    ("axis-c-bound-below-the-guide-ways-own", lambda t, s: ["modes", axis(t, s, sub(
+        "# c = [5578.0, 1.0e8]", "c = [1.0, 1.0e8]"))], 1,
+     "[tuning] c: the lower bound 1 N s/m is below the guide ways' own viscous friction "
+     "sigma2 = 5578 N s/m ([friction.lugre])"),
     ("axis-immersion-underflow", lambda t, s: ["tune", axis(t, s, sub(
         "radial_immersion = 0.5", "radial_immersion = 2.4e-197"))], 1,
      "[cutting] radial_immersion"),

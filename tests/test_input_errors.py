@@ -315,3 +315,16 @@ def test_ctrl_c_under_json_is_one_json_object(tmp_path, capsys, monkeypatch):
         assert out["error"] == captured.err.strip()
         assert out["error"].startswith(f"servotune {argv[0]}: interrupted")
         assert "nothing was written" in out["error"]
+
+
+def test_an_empty_list_of_feed_speeds_is_said_to_mean_standing_only(tmp_path, capsys):
+    """feed_speeds = [] leaves out every feeding regime: loaded (a standing-only axis is
+    legitimate) but said among the defaults taken, not silently."""
+    folder = _starter(tmp_path, ("# feed_speeds = [0.01, 0.05]", "feed_speeds = []"))
+    axis = load_axis(folder)
+    assert axis.operation.feed_speeds == ()
+    assert any("feed_speeds = []: no feeding regime, the axis is judged standing only" in d
+               for d in axis.defaults)
+    assert main(["modes", str(folder), "--out", str(tmp_path / "out")]) == 0
+    assert "default taken: [operation] feed_speeds = []: no feeding regime" in \
+        capsys.readouterr().out
