@@ -11,23 +11,28 @@ Methods, each timed in a fresh process (peak resident memory from ``getrusage``)
 
 * ``servotune``: :func:`servotune.structure.craig_bampton_basis` as shipped (one sparse
   factorisation of K_ii for the constraint modes and the shift-invert Lanczos of ``eigsh``
-  from a random start, then a Sturm count that checks no mode was missed; SuperLU unless
-  ``pypardiso`` is installed);
-* ``scipy`` (the baseline): the same reduction written plainly with scipy, as a careful user
+  from a random start for 26 modes, then a Sturm count at the middle of the gap between the
+  25th and the 26th that checks no mode was missed: a factorisation of K_ii - s M_ii after
+  the factors of K_ii are freed; SuperLU unless ``pypardiso`` is installed);
+* ``scipy`` (the baseline): the same work written plainly with scipy, as a careful user
   writes it: ``splu(K_ii)`` with the column ordering and pivoting servotune's own
   factorisation uses (``permc_spec="MMD_AT_PLUS_A"``, ``diag_pivot_thresh=0``, symmetric
   mode: the right choice for a symmetric positive-definite K_ii), the constraint modes from it
-  and ``eigsh(K_ii, k, M_ii, sigma=0, OPinv=...)`` with its defaults (no check of missed
-  modes);
-* ``scipy_defaults``: the same with ``splu``'s default ordering (COLAMD), for reference only
-  (not a fair baseline: it fills in far more);
+  and ``eigsh(K_ii, 26, M_ii, sigma=0, OPinv=...)`` with its defaults; then the same Sturm
+  count as servotune's (``del`` of the first factors, ``splu(K_ii - s M_ii)`` with the same
+  options, the negative entries of ``U.diagonal()``, the permutations checked equal);
+* ``scipy_nocheck``: the baseline without the Sturm count (25 modes, no check that none was
+  missed), for reference: servotune does more work than it;
+* ``scipy_defaults``: ``scipy_nocheck`` with ``splu``'s default ordering (COLAMD), for
+  reference only (not a fair baseline: it fills in far more);
 * ``dense`` (a second baseline, where it fits): dense Cholesky for the constraint modes and
   ``scipy.linalg.eigh(K_ii, M_ii, subset_by_index=...)``;
 * ``check``: :func:`servotune.structure.reduction_check` of the servotune model against the
   full model over 5-300 Hz (reported apart: it is a second job, not part of the reduction).
 
-Usage: ``python benchmarks/craig_bampton.py [--json] [--sizes N ...] [--dense-max N]``; the
-top-level ``speedup`` is scipy's time over servotune's at the largest size.
+Usage: ``python benchmarks/craig_bampton.py [--json] [--sizes N ...] [--dense-max N]
+[--methods M ...]``; the top-level ``speedup`` is scipy's time over servotune's at the largest
+size (``speedup_no_check``: the same against ``scipy_nocheck``).
 """
 
 from __future__ import annotations
@@ -159,9 +164,10 @@ def dense_reduction(m, k, boundary, n_modes):
     return mr, kr
 
 
-def scipy_reduction(m, k, boundary, n_modes, ordering: bool = True):
+def scipy_reduction(m, k, boundary, n_modes, ordering: bool = True, check: bool = True):
     """The plain scipy baseline: splu (with servotune's ordering and pivoting unless
-    ``ordering`` is False) and eigsh with its defaults."""
+    ``ordering`` is False) and eigsh with its defaults; with ``check`` one mode more and a
+    Sturm count in the gap above the last kept mode (the check servotune makes)."""
     import scipy.sparse.linalg as sla
 
     n = m.shape[0]
@@ -171,13 +177,28 @@ def scipy_reduction(m, k, boundary, n_modes, ordering: bool = True):
     m_ii = m[interior][:, interior].tocsc()
     k_ib = k[interior][:, boundary].toarray()
     m_ib = m[interior][:, boundary].toarray()
-    lu = (sla.splu(k_ii, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True}) if ordering else sla.splu(k_ii))
+    options = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.0,
+               "options": {"SymmetricMode": True}}
+    lu = sla.splu(k_ii, **options) if ordering else sla.splu(k_ii)
     psi = -lu.solve(k_ib)
     op = sla.LinearOperator(k_ii.shape, matvec=lu.solve, dtype=float)
-    w2, phi = sla.eigsh(k_ii, k=n_modes, M=m_ii, sigma=0.0, OPinv=op)
+    w2, phi = sla.eigsh(k_ii, k=n_modes + (1 if check else 0), M=m_ii, sigma=0.0, OPinv=op)
     order = np.argsort(w2)
     w2, phi = w2[order], phi[:, order]
+    if check:
+        # Sturm count: the negative pivots of K_ii - s M_ii = L D L^T (Sylvester) are the
+        # modes below s, s between the last kept mode and the next
+        del lu, op
+        s = 0.5 * (w2[n_modes - 1] + w2[n_modes])
+        lu = sla.splu((k_ii - s * m_ii).tocsc(), **options)
+        if not np.array_equal(lu.perm_r, lu.perm_c):
+            raise RuntimeError("SuperLU pivoted off the diagonal: no Sturm count")
+        below = int(np.sum(lu.U.diagonal() < 0))
+        del lu
+        if below != n_modes:
+            raise RuntimeError(f"{below} fixed-interface modes below {s:.6g}, "
+                               f"{n_modes} found")
+        w2, phi = w2[:n_modes], phi[:, :n_modes]
     mbb = m[boundary][:, boundary].toarray() + m_ib.T @ psi + psi.T @ m_ib + psi.T @ (m_ii @ psi)
     mbm = (m_ib.T + (m_ii @ psi).T) @ phi
     mr = np.block([[mbb, mbm], [mbm.T, np.eye(n_modes)]])
@@ -207,10 +228,13 @@ def run_case(n_target: int, method: str) -> dict:
         solver = "lapack"
     elif method == "scipy":
         mr, kr = scipy_reduction(m, k, boundary, N_MODES)
-        solver = "superlu (MMD_AT_PLUS_A, diag_pivot_thresh 0, symmetric mode)"
+        solver = "superlu (MMD_AT_PLUS_A, diag_pivot_thresh 0, symmetric mode), Sturm count"
+    elif method == "scipy_nocheck":
+        mr, kr = scipy_reduction(m, k, boundary, N_MODES, check=False)
+        solver = "superlu (MMD_AT_PLUS_A, diag_pivot_thresh 0, symmetric mode), no check"
     elif method == "scipy_defaults":
-        mr, kr = scipy_reduction(m, k, boundary, N_MODES, ordering=False)
-        solver = "superlu (scipy defaults)"
+        mr, kr = scipy_reduction(m, k, boundary, N_MODES, ordering=False, check=False)
+        solver = "superlu (scipy defaults), no check"
     else:
         solver = "pardiso" if pardiso_available() else "superlu"
         basis = craig_bampton_basis(m, k, boundary, n_modes=N_MODES)
@@ -281,6 +305,8 @@ def main(argv=None) -> dict:
     parser.add_argument("--no-check", action="store_true",
                         help="skip the run with the reduction check")
     parser.add_argument("--timeout", type=float, default=900.0, help="per case [s]")
+    parser.add_argument("--methods", nargs="+", default=None,
+                        help="the methods to run (default: all that fit)")
     parser.add_argument("--case", nargs=2, metavar=("N", "METHOD"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.case:
@@ -288,9 +314,11 @@ def main(argv=None) -> dict:
         return {}
     rows = []
     for n in args.sizes:
-        methods = (["servotune", "scipy", "scipy_defaults"]
+        methods = (["servotune", "scipy", "scipy_nocheck", "scipy_defaults"]
                    + (["dense"] if n <= args.dense_max else [])
                    + ([] if args.no_check else ["check"]))
+        if args.methods:
+            methods = [x for x in methods if x in args.methods]
         for method in methods:
             row = _in_subprocess(n, method, args.timeout)
             rows.append(row)
@@ -307,18 +335,23 @@ def main(argv=None) -> dict:
     result = {"n_modes": N_MODES, "n_boundary": 15, "cores": os.cpu_count(),
               "load_average_1min_at_end": os.getloadavg()[0], "cases": rows,
               "baseline": "scipy (splu with servotune's ordering and pivoting + eigsh with its "
-                          "defaults, same modes)"}
+                          "defaults, same modes, the same Sturm count as servotune's check)"}
     result["against_scipy"] = _compare(ok, "scipy")
+    result["against_scipy_nocheck"] = _compare(ok, "scipy_nocheck")
     result["against_scipy_defaults"] = _compare(ok, "scipy_defaults")
     result["against_dense"] = _compare(ok, "dense")
     largest = result["against_scipy"][-1] if result["against_scipy"] else None
     result["speedup"] = None if largest is None else largest["speedup"]
     result["memory_ratio"] = None if largest is None else largest["memory_ratio"]
     result["speedup_n_dof"] = None if largest is None else largest["n_dof"]
+    plain = result["against_scipy_nocheck"][-1] if result["against_scipy_nocheck"] else None
+    result["speedup_no_check"] = None if plain is None else plain["speedup"]
+    result["memory_ratio_no_check"] = None if plain is None else plain["memory_ratio"]
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        for key in ("against_scipy", "against_scipy_defaults", "against_dense"):
+        for key in ("against_scipy", "against_scipy_nocheck", "against_scipy_defaults",
+                    "against_dense"):
             for s in result[key]:
                 print(f"{s['n_dof']} DOF, servotune vs {s['baseline']}: speedup "
                       f"{s['speedup']:.2f}x, memory {s['memory_ratio']:.2f} of the baseline "

@@ -62,14 +62,15 @@ __all__ = [
 _pardiso_available = pardiso_available  # former private name, kept for scripts that use it
 
 
-def _as_sparse(name: str, a) -> scipy.sparse.csc_array:
+def _as_sparse(name: str, a) -> scipy.sparse.csr_array:
+    # CSR, the format the blocks are cut from: a CSR input is not copied
     if scipy.sparse.issparse(a):
-        a = scipy.sparse.csc_array(a, dtype=float)
+        a = scipy.sparse.csr_array(a, dtype=float)
     else:
         a = np.asarray(a, dtype=float)
         if a.ndim != 2:
             raise ValueError(f"{name} must be a 2-D matrix, got {a.ndim} dimensions")
-        a = scipy.sparse.csc_array(a)
+        a = scipy.sparse.csr_array(a)
     if a.shape[0] != a.shape[1]:
         raise ValueError(f"{name} must be square, got shape {a.shape}")
     if not np.all(np.isfinite(a.data)):
@@ -269,13 +270,13 @@ def craig_bampton_basis(mass, stiffness, boundary, n_modes=None, f_max_hz=None,
     mask = np.ones(n, dtype=bool)
     mask[b] = False
     i = np.flatnonzero(mask)
-    m, k = m.tocsr(), k.tocsr()
-    k_ii = k[i][:, i].tocsc()
-    k_ib = k[i][:, b].toarray()
-    m_ii = m[i][:, i].tocsc()
-    m_ib = m[i][:, b].toarray()
+    k_i, m_i = k[i], m[i]  # the interior rows, once
+    k_ii, k_ib = k_i[:, i].tocsc(), k_i[:, b].toarray()
+    m_ii, m_ib = m_i[:, i].tocsc(), m_i[:, b].toarray()
+    del k_i, m_i
     k_bb = k[b][:, b].toarray()
     m_bb = m[b][:, b].toarray()
+    del m, k  # only the blocks from here on (the caller's matrices are not copied)
 
     # with a cut-off the Sturm count comes first: the factors wait until they are needed
     factor = factorise(k_ii, solver, name="K_ii", mechanism=_MECHANISM,
@@ -332,10 +333,12 @@ def craig_bampton(mass, stiffness, boundary, n_modes=None, f_max_hz=None, dampin
         K_ii has more than 5000 rows.
     verify : {"auto", "sturm", "deflation", "none"}
         How the iterative eigen-solution is checked for missed modes, which are then added by
-        deflated restarts (see :func:`~servotune.structure.lowest_modes`): with ``f_max_hz``
-        the Sturm count that sizes the run, with ``n_modes`` a deflated Lanczos probe (no
-        extra factorisation or memory); "sturm" for an exact count there too (one more
-        factorisation, of K_ii - s M_ii).
+        deflated restarts (see :func:`~servotune.structure.lowest_modes`): "auto" and
+        "sturm", a Sturm count (with ``f_max_hz`` the count that sizes the run; with
+        ``n_modes`` a count of the eigenvalues below a point in the gap above the last kept
+        mode: one more factorisation, of K_ii - s M_ii, made after the factors of K_ii are
+        freed and in their ordering, so the peak memory stays that of one factorisation);
+        "deflation", a deflated Lanczos probe instead (no factorisation, not an exact count).
 
     Returns
     -------

@@ -20,6 +20,8 @@ of a repeated eigenvalue kept and the result checked:
   semi-definite, M semi-definite). After the Lanczos run this count is compared with the modes
   found below s (s in a gap above the last wanted mode); the check is what MSC/NX Nastran
   (``EIGRL`` ``SCHECK``) and Ansys (``LANBOPTION,,ON``) perform to make sure no mode is missed.
+  The factors of K used by the Lanczos run are freed first, and the count's factorisation
+  reuses their fill-reducing ordering, so the check adds no memory and no second ordering.
 * **deflated restarts.** When the count shows missed modes (copies of a repeated eigenvalue),
   Lanczos is run again on the operator with the modes found so far projected out (the first
   remedy of Bai et al. 2000, sec 4.4.4), until the count agrees.
@@ -27,7 +29,10 @@ of a repeated eigenvalue kept and the result checked:
 The Sturm count uses SuperLU with a symmetric ordering, diagonal pivots only and
 ``SymmetricMode``: the factors are then P A P^T = L D L^T with D the diagonal of U, and the
 same-permutation condition is checked (a zero pivot would make SuperLU pivot off the diagonal;
-the shift is then moved slightly and the count repeated).
+the shift is then moved slightly and the count repeated). The diagonal of U is read from
+SuperLU's own supernodal storage in place (scipy hands U out only as a converted copy of both
+factors, as large as the factors themselves); the reading checks the layout it relies on and
+falls back to scipy's copy when anything does not match.
 
 References
 ----------
@@ -41,6 +46,7 @@ algorithm of MSC Nastran, with its Sturm sequence checks).
 
 from __future__ import annotations
 
+import ctypes
 import math
 from dataclasses import dataclass
 
@@ -99,6 +105,8 @@ class _SuperLUFactor:
         self._a = scipy.sparse.csc_array(a)
         self._name, self._mechanism = name, mechanism
         self._lu = None
+        #: The symmetric fill-reducing ordering of the factors (SuperLU's perm_c), once known.
+        self.ordering = None
         if not lazy:
             self._factorise()
 
@@ -107,6 +115,7 @@ class _SuperLUFactor:
             lu = _superlu(self._a)
         except RuntimeError as exc:
             raise ValueError(self._mechanism) from exc
+        self.ordering = lu.perm_c.copy()
         if self._a.shape[0] > PIVOT_CHECK_MAX:
             # scipy hands out U only as a full copy (a third of the factors' memory): on large
             # models an indefinite or nearly singular matrix shows in the eigenvalues instead
@@ -174,9 +183,93 @@ class _PardisoFactor:
             self._solver = None
 
 
-def _superlu(a):
-    return scipy.sparse.linalg.splu(scipy.sparse.csc_array(a), permc_spec="MMD_AT_PLUS_A",
+def _superlu(a, permc_spec="MMD_AT_PLUS_A"):
+    return scipy.sparse.linalg.splu(scipy.sparse.csc_array(a), permc_spec=permc_spec,
                                     diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+
+
+# Layout of scipy's SuperLU object and of SuperLU's supernodal L (scipy/sparse/linalg/_dsolve/
+# _superluobject.h, SuperLU's supermatrix.h): PyObject_HEAD, npy_intp m, n, SuperMatrix L, U
+# (Stype, Dtype, Mtype, nrow, ncol as 32-bit ints, then the Store pointer), int *perm_r, ...
+_SLU_SC, _SLU_D, _SLU_TRLU = 3, 1, 1
+_LU_DIAGONAL_IN_PLACE = None  # decided by a self-test on first use
+
+
+def _int32_view(address, size):
+    return np.frombuffer((ctypes.c_int32 * size).from_address(address), dtype=np.int32)
+
+
+def _u_diagonal_in_place(lu):
+    """diag(U) of scipy's SuperLU factors read from the supernodal L in place, or None when the
+    object does not have the expected layout (checked field by field before any pointer is
+    followed: sizes, storage type, and perm_r against the array scipy reports)."""
+    n = lu.shape[0]
+    base = id(lu)  # CPython: the object's address
+    if tuple((ctypes.c_ssize_t * 2).from_address(base + 16)) != (n, n):
+        return None
+    header = tuple((ctypes.c_int32 * 5).from_address(base + 32))
+    if header != (_SLU_SC, _SLU_D, _SLU_TRLU, n, n):
+        return None
+    store = ctypes.c_void_p.from_address(base + 56).value
+    perm_r = ctypes.c_void_p.from_address(base + 96).value
+    if not store or not perm_r or not np.array_equal(_int32_view(perm_r, n), lu.perm_r):
+        return None
+    nsuper = ctypes.c_int32.from_address(store + 4).value
+    if not 0 <= nsuper < n:
+        return None
+    nzval, nzval_colptr, rowind, rowind_colptr, col_to_sup, sup_to_col = (
+        ctypes.c_void_p * 6).from_address(store + 8)
+    if not all((nzval, nzval_colptr, rowind, rowind_colptr, col_to_sup, sup_to_col)):
+        return None
+    sup_to_col = _int32_view(sup_to_col, nsuper + 2)
+    col_to_sup = _int32_view(col_to_sup, n)
+    nzval_colptr = _int32_view(nzval_colptr, n + 1)
+    rowind_colptr = _int32_view(rowind_colptr, n + 1)
+    if (sup_to_col[0] != 0 or sup_to_col[-1] != n or np.any(np.diff(sup_to_col) <= 0)
+            or col_to_sup.min() < 0 or col_to_sup.max() > nsuper
+            or nzval_colptr[0] != 0 or np.any(np.diff(nzval_colptr) <= 0)
+            or rowind_colptr[0] != 0 or np.any(np.diff(rowind_colptr) < 0)):
+        return None
+    cols = np.arange(n)
+    first = sup_to_col[col_to_sup]  # first column of each column's supernode
+    offset = cols - first
+    if np.any(offset < 0) or np.any(cols >= sup_to_col[col_to_sup + 1]):
+        return None
+    # each supernode lists its diagonal block's rows first, in order: row j of column j is at
+    # position j - first in both the row subscripts and the column's values
+    row_of_diagonal = _int32_view(rowind, int(rowind_colptr[-1]))[rowind_colptr[first] + offset]
+    if not np.array_equal(row_of_diagonal, cols):
+        return None
+    values = np.frombuffer((ctypes.c_double * int(nzval_colptr[-1])).from_address(nzval),
+                           dtype=float)
+    return values[nzval_colptr[:-1] + offset].copy()
+
+
+def _in_place_reading_works() -> bool:
+    """Compare the in-place reading with scipy's copy of U on a small random factorisation."""
+    rng = np.random.default_rng(_SEED)
+    n = 120
+    a = scipy.sparse.random_array((n, n), density=0.03, rng=rng)
+    a = (a @ a.T + scipy.sparse.diags_array(rng.uniform(-1.0, 2.0, n))).tocsc()
+    try:
+        lu = _superlu(a)
+        d = _u_diagonal_in_place(lu)
+        return d is not None and np.array_equal(d, lu.U.diagonal())
+    except Exception:  # any surprise: use scipy's copy
+        return False
+
+
+def _u_diagonal(lu) -> np.ndarray:
+    """The diagonal of U of scipy's SuperLU factors, without copying the factors when
+    possible."""
+    global _LU_DIAGONAL_IN_PLACE
+    if _LU_DIAGONAL_IN_PLACE is None:
+        _LU_DIAGONAL_IN_PLACE = _in_place_reading_works()
+    if _LU_DIAGONAL_IN_PLACE:
+        d = _u_diagonal_in_place(lu)
+        if d is not None:
+            return d
+    return lu.U.diagonal()
 
 
 def factorise(a, solver: str = "auto", *, name: str = "K_ii", mechanism: str | None = None,
@@ -221,7 +314,7 @@ def factorise(a, solver: str = "auto", *, name: str = "K_ii", mechanism: str | N
     return _SuperLUFactor(a, name, mechanism, lazy)
 
 
-def count_eigenvalues_below(k, m, value: float) -> int:
+def count_eigenvalues_below(k, m, value: float, *, ordering=None) -> int:
     """Number of eigenvalues lambda of K phi = lambda M phi below ``value`` (Sturm count).
 
     The count of negative pivots of an LDL^T factorisation of K - value M (Sylvester's law of
@@ -236,6 +329,10 @@ def count_eigenvalues_below(k, m, value: float) -> int:
         Mass M, symmetric positive semi-definite.
     value : float
         The shift lambda = omega^2 [rad^2/s^2].
+    ordering : (n,) array_like of int, optional
+        A symmetric fill-reducing ordering for the pattern of K - value M (SuperLU's ``perm_c``
+        of a factorisation of K, e.g. ``factorise(k).ordering``): reused instead of computing
+        a new one (default: SuperLU's minimum degree on A^T + A).
 
     Returns
     -------
@@ -263,16 +360,29 @@ def count_eigenvalues_below(k, m, value: float) -> int:
         # K - value M congruent to a diagonal: inertia from the dense symmetric eigenvalues
         w = np.linalg.eigvalsh((k - value * m).toarray())
         return int(np.sum(w < 0))
+    if ordering is not None:
+        # P (K - s M) P^T in the given order: a congruence, same inertia, no new ordering
+        ordering = np.asarray(ordering)
+        if ordering.shape != (n,) or not np.array_equal(np.sort(ordering), np.arange(n)):
+            raise ValueError(f"ordering must be a permutation of 0..{n - 1}")
+        inverse = np.argsort(ordering)
     step = 1e-10 * max(abs(value), 1e-300)
     for attempt in range(6):
         shifted = value + attempt * step * (-1) ** attempt
+        a = (k - shifted * m).tocsc()
+        if ordering is not None:
+            a = a[inverse][:, inverse].tocsc()
         try:
-            lu = _superlu(k - shifted * m)
+            lu = _superlu(a, "NATURAL" if ordering is not None else "MMD_AT_PLUS_A")
         except RuntimeError:
             continue  # exactly singular: an eigenvalue at the shift; move it slightly
+        finally:
+            del a
         if not np.array_equal(lu.perm_r, lu.perm_c):
+            del lu
             continue  # SuperLU pivoted off the diagonal: the inertia is not in diag(U)
-        d = lu.U.diagonal()
+        d = _u_diagonal(lu)
+        del lu
         if np.all(np.isfinite(d)) and np.all(d != 0):
             return int(np.sum(d < 0))
     raise ValueError(f"the Sturm count at {value:.6g} failed (SuperLU could not factorise "
@@ -406,9 +516,10 @@ def lowest_modes(k, m, *, count: int | None = None, below: float | None = None,
         factorisation, an exact count). "deflation": a further Lanczos run from a new random
         vector on the operator with the modes found projected out; any eigenvalue it finds
         below the last wanted one was missed (no factorisation, no extra memory). Either way
-        missed modes are added by deflated restarts. "auto": with ``below`` the Sturm count
-        that sizes the run is the check; with ``count``, deflation. "none" only for tests
-        and timing.
+        missed modes are added by deflated restarts. "auto": "sturm" (with ``below`` the
+        Sturm count that sizes the run is the check; with ``count`` a count in the gap above
+        the last wanted mode, with the fill-reducing ordering of ``factor`` when it has one).
+        "none" only for tests and timing.
     v0 : (n,) array_like, optional
         Start vector (default: seeded Gaussian). Meant for tests that reproduce the failure of a
         structured start.
@@ -416,7 +527,8 @@ def lowest_modes(k, m, *, count: int | None = None, below: float | None = None,
         What K is, for error messages.
     release_factor : bool
         Free the factors of K - shift M before a Sturm count (whose own factorisation then
-        does not add to the peak memory); they are rebuilt only if a restart needs them.
+        does not add to the peak memory); they are rebuilt only if a restart needs them (the
+        ordering is kept for the count).
 
     Returns
     -------
@@ -471,7 +583,7 @@ def lowest_modes(k, m, *, count: int | None = None, below: float | None = None,
     w, phi = _lanczos(k, m, want, shift, factor, v0, tol)
     w, phi = _rayleigh_ritz(k, m, phi)
     if verify == "auto":
-        verify = "sturm" if sturm is not None else "deflation"
+        verify = "sturm"
     rng = np.random.default_rng(_SEED + 1)
     restarts = 0
 
@@ -486,7 +598,8 @@ def lowest_modes(k, m, *, count: int | None = None, below: float | None = None,
             factor.release()
         if sturm is None:
             point = _sturm_point(w, count)
-            sturm = (point, count_eigenvalues_below(k, m, point))
+            sturm = (point, count_eigenvalues_below(k, m, point,
+                                                    ordering=getattr(factor, "ordering", None)))
         point, expected = sturm
         while int(np.sum(w < point)) < expected:
             if restarts >= MAX_RESTARTS:
