@@ -653,6 +653,8 @@ CASES = [
         t, "modes_paper_x_axis")], 1, "notes.txt"),
     ("out-run-folder-is-a-file", lambda t, s: ["friction", "--out", _blocked(
         t, "friction_bianchi2014")], 1, "friction_bianchi2014"),
+    ("out-empty", lambda t, s: ["modes", str(PAPER), "--out", ""], 2,
+     "argument --out: '' is empty: give the folder for the results"),
     ("init-into-a-file", lambda t, s: ["init", text_file(t, "axis.toml", "x")], 1,
      "is a file"),
     ("init-under-a-file", lambda t, s: ["init", str(Path(text_file(t, "f", "x")) / "a")], 1,

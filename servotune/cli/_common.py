@@ -77,6 +77,7 @@ __all__ = [
     "add_common_options",
     "refuse_no_plots",
     "add_output_options",
+    "out_folder",
     "add_workers_option",
     "add_duration_option",
     "add_contact_options",
@@ -251,7 +252,7 @@ def add_common_options(parser, *, out: bool = True, plots: bool = False,
                         help="no progress bars on standard error (also off under --json and "
                              "when standard error is not a terminal)", **keep)
     if out:
-        parser.add_argument("--out", type=Path, metavar="DIR",
+        parser.add_argument("--out", type=out_folder, metavar="DIR",
                             default=argparse.SUPPRESS if nested else Path(DEFAULT_OUT),
                             help=f"parent folder of the results (default {DEFAULT_OUT}); this "
                                  "run writes into DIR/<command>_<subject>, replacing its own "
@@ -279,6 +280,15 @@ def refuse_no_plots(parser, command: str, writes: str = "results.json") -> None:
                         help=argparse.SUPPRESS)
 
 
+def out_folder(text: str) -> Path:
+    """``--out DIR``: a folder name, not an empty text (an unset shell variable would put the
+    results into the current folder unnoticed)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is empty: give the folder for the results, "
+                                         f"e.g. --out {DEFAULT_OUT}")
+    return Path(text)
+
+
 def add_output_options(parser, default_out: str | None = DEFAULT_OUT) -> None:
     """The flags of earlier versions (``--json``, ``--out DIR``, ``--force``) for commands that
     have not moved to :func:`add_common_options` and :class:`RunOutput` yet; ``--quiet`` is
@@ -288,7 +298,7 @@ def add_output_options(parser, default_out: str | None = DEFAULT_OUT) -> None:
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bars on standard error")
     if default_out is not None:
-        parser.add_argument("--out", type=Path, default=Path(default_out),
+        parser.add_argument("--out", type=out_folder, default=Path(default_out),
                             help=f"folder for figures and results (default: {default_out})")
         parser.add_argument("--force", action="store_true",
                             help="overwrite existing output files")
