@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -117,8 +118,8 @@ class _SuperLUFactor:
             raise ValueError(self._mechanism) from exc
         self.ordering = lu.perm_c.copy()
         if self._a.shape[0] > PIVOT_CHECK_MAX:
-            # scipy hands out U only as a full copy (a third of the factors' memory): on large
-            # models an indefinite or nearly singular matrix shows in the eigenvalues instead
+            # on large models an indefinite or nearly singular matrix shows in the eigenvalues
+            # instead
             self._lu = lu
             return
         pivots = lu.U.diagonal()
@@ -255,7 +256,7 @@ def _in_place_reading_works() -> bool:
         lu = _superlu(a)
         d = _u_diagonal_in_place(lu)
         return d is not None and np.array_equal(d, lu.U.diagonal())
-    except Exception:  # any surprise: use scipy's copy
+    except (RuntimeError, IndexError, ValueError, OverflowError):  # use scipy's copy
         return False
 
 
@@ -264,9 +265,13 @@ def _u_diagonal(lu) -> np.ndarray:
     possible."""
     global _LU_DIAGONAL_IN_PLACE
     if _LU_DIAGONAL_IN_PLACE is None:
-        _LU_DIAGONAL_IN_PLACE = _in_place_reading_works()
+        _LU_DIAGONAL_IN_PLACE = (sys.implementation.name == "cpython" and sys.maxsize > 2**32
+                                 and _in_place_reading_works())
     if _LU_DIAGONAL_IN_PLACE:
-        d = _u_diagonal_in_place(lu)
+        try:
+            d = _u_diagonal_in_place(lu)
+        except (IndexError, ValueError, OverflowError):  # an index outside the views
+            d = None
         if d is not None:
             return d
     return lu.U.diagonal()
