@@ -550,6 +550,11 @@ CASES = [
                                             "--speed", "30"], 2, "[-10, 10] m/s"),
     ("compliance-c-without-viscous", lambda t, s: [
         "compliance", str(PAPER), "--contact", "locked", "--c", "1e5"], 1, "--c"),
+    ("compliance-amplitude-negative-exponent", lambda t, s: [
+        "compliance", str(PAPER), "--contact", "equivalent", "--amplitude", "-1e-6",
+        "--frequency-hz", "50"], 2,
+     "argument --amplitude: expected one argument (-1e-6 reads as a flag: write "
+     "--amplitude=-1e-6 for a negative number)"),
     ("bode-contact-unknown", lambda t, s: ["bode", str(PAPER), "--contact", "glue"], 2,
      "--contact"),
     pytest.param("tune-starts-zero", lambda t, s: ["tune", str(PAPER), "--starts", "0"], 2,

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import sys
 
 __all__ = ["main", "build_parser", "COMMANDS", "SUMMARIES"]
@@ -63,8 +64,22 @@ class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
+        self.given: list[str] = []
+
+    def parse_known_args(self, args=None, namespace=None):
+        self.given = list(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
 
     def error(self, message):
+        # argparse takes a negative number with an exponent (-1e-6) for a flag: say how to
+        # give it, instead of only "expected one argument"
+        found = re.match(r"argument (\S+?)(?:/\S+)?: expected one argument$", message)
+        if found and found.group(1) in self.given:
+            i = self.given.index(found.group(1))
+            value = self.given[i + 1] if i + 1 < len(self.given) else ""
+            if re.match(r"^-\.?\d", value):
+                message += (f" ({value} reads as a flag: write {found.group(1)}={value} for a "
+                            "negative number)")
         try:
             super().error(message)
         except SystemExit as exc:
