@@ -839,7 +839,8 @@ def _check_bristles(params, file, name) -> None:
 #: than identified guide ways (Bianchi et al. 2014: Fc 2.2 kN, vs 0.01 m/s, sigma2 5.6 kN s/m;
 #: Canudas de Wit et al. 1995: vs 1e-3 m/s), to catch unit and exponent slips only.
 LUGRE_RANGES = {"fc": (0.0, 1e7, "N"), "fs": (0.0, 1e7, "N"), "vs": (1e-7, 1.0, "m/s"),
-                "sigma0": (0.0, 1e14, "N/m"), "sigma2": (0.0, 1e10, "N s/m")}
+                "delta": (0.0, 10.0, "(an exponent)"), "sigma0": (0.0, 1e14, "N/m"),
+                "sigma2": (0.0, 1e10, "N s/m")}
 
 
 def _check_lugre_ranges(params, file, name) -> None:
@@ -849,9 +850,11 @@ def _check_lugre_ranges(params, file, name) -> None:
     for key, (low, high, unit) in LUGRE_RANGES.items():
         value = getattr(params, key)
         if not low <= value <= high:
-            raise _err(file, f"[friction.{name}] {key}", f"{value:g} {unit} is outside the "
+            shown = "" if unit.startswith("(") else f" {unit}"
+            raise _err(file, f"[friction.{name}] {key}", f"{value:g}{shown} is outside the "
                        f"plausible range [{low:g}, {high:g}] {unit} of guide-way friction",
-                       f"check the value and its unit ({unit}, axis totals)"
+                       (f"check the value and its unit ({unit}, axis totals)" if shown else
+                        "check the value (identified guide ways give 0.5 to 2)")
                        + (", e.g. 0.01 m/s, not mm/s" if key == "vs" else ""))
 
 
@@ -1543,6 +1546,12 @@ def _requirements(data, file) -> Requirements:
             low, high, unit = _REQUIREMENT_RANGES[key]
             kwargs[key] = _number(table, key, file, "requirements", positive=False, low=low,
                                   high=high, unit=unit)
+    pm = kwargs.get("phase_margin_min_deg")
+    if pm is not None and 0.0 < pm <= 0.5 * math.pi:  # no design asks for 1 deg: radians
+        raise _err(file, "[requirements] phase_margin_min_deg", f"{pm:g} deg is no phase "
+                   f"margin a design asks for, but {pm:g} rad = {math.degrees(pm):.3g} deg is",
+                   f"give degrees, e.g. {math.degrees(pm):.0f} (or 0 for no phase-margin "
+                   "requirement)")
     for key in ratios:
         if key in table:
             kwargs[key] = _number(table, key, file, "requirements", low=0.0, high=1e3,

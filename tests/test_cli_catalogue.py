@@ -317,6 +317,14 @@ CASES = [
         "# c = [5578.0, 1.0e8]", "c = [1.0, 1.0e8]"))], 1,
      "[tuning] c: the lower bound 1 N s/m is below the guide ways' own viscous friction "
      "sigma2 = 5578 N s/m ([friction.lugre])"),
+    ("axis-lugre-delta-implausible", lambda t, s: ["modes", axis(t, s, sub(
+        "delta = 1.0 ", "delta = 50.0 "))], 1,
+     "[friction.lugre] delta: 50 is outside the plausible range [0, 10] (an exponent) of "
+     "guide-way friction"),
+    ("axis-phase-margin-in-radians", lambda t, s: ["modes", axis(t, s, sub(
+        "phase_margin_min_deg = 40.0", "phase_margin_min_deg = 0.7"))], 1,
+     "[requirements] phase_margin_min_deg: 0.7 deg is no phase margin a design asks for, but "
+     "0.7 rad = 40.1 deg is; give degrees, e.g. 40"),
     ("axis-immersion-underflow", lambda t, s: ["tune", axis(t, s, sub(
         "radial_immersion = 0.5", "radial_immersion = 2.4e-197"))], 1,
      "[cutting] radial_immersion"),
