@@ -328,3 +328,15 @@ def test_an_empty_list_of_feed_speeds_is_said_to_mean_standing_only(tmp_path, ca
     assert main(["modes", str(folder), "--out", str(tmp_path / "out")]) == 0
     assert "default taken: [operation] feed_speeds = []: no feeding regime" in \
         capsys.readouterr().out
+
+
+def test_lobes_says_default_taken_for_what_stands_in(tmp_path, capsys):
+    """One vocabulary in every command: the benchmark's cutting values that stand in for the
+    flags not given, and the axis' own defaults, are each 'default taken:' in lobes as in
+    modes and bode."""
+    code = main(["lobes", "--mode", "922", "0.011", "1.34e6", "--speed-count", "50",
+                 "--out", str(tmp_path / "out")])
+    text = capsys.readouterr().out
+    assert code == 0
+    assert "  default taken: cutting set-up not given in full: --teeth 2" in text
+    assert "  note: cutting set-up" not in text

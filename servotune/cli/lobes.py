@@ -321,8 +321,8 @@ def run(args) -> int:
     if required is not None:
         print(f"  margin at {required / MM:g} mm : {out['margin']:.3f} "
               f"({'stable' if out['margin'] > 1 else 'chatter'} at the worst speed)")
-    for message in out["notes"]:
-        print(f"  note: {message}")
+    for message in out["notes"]:  # each stands in for what was not given
+        print(f"  default taken: {message}")
     for message in out["warnings"]:
         print(f"  warning: {message}")
     print(f"  wrote {run_out.path}")
