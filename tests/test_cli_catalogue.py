@@ -569,6 +569,10 @@ CASES = [
                  "--starts"),
     pytest.param("tune-starts-negative", lambda t, s: ["tune", str(PAPER), "--starts", "-5"], 2,
                  "--starts"),
+    ("tune-spread-samples-without-a-study", lambda t, s: [
+        "tune", str(PAPER), "--spread-samples", "3", "--no-simulation"], 2,
+     "--spread-samples counts the worst samples of --spread-from STUDY; give --spread-from "
+     "too, or drop --spread-samples"),
     ("tune-free-unknown", lambda t, s: ["tune", str(PAPER), "--free", "xyz"], 2, "--free"),
     ("study-missing-file", lambda t, s: ["study", str(t / "s.toml")], 1, "no study file"),
     ("study-not-toml", lambda t, s: ["study", text_file(t, "s.toml", "[study\n")], 1,

@@ -22,6 +22,7 @@ from ._common import (
     FRACTION,
     STARTS,
     RunOutput,
+    UsageError,
     add_common_options,
     add_workers_option,
     default_workers,
@@ -100,7 +101,7 @@ def add_parser(subparsers) -> None:
                         "it finished) or its results.parquet (servotune study): its worst "
                         "samples become further friction models of every regime, so the design "
                         "is tuned for them too")
-    p.add_argument("--spread-samples", type=SPREAD_SAMPLES, default=4, metavar="N",
+    p.add_argument("--spread-samples", type=SPREAD_SAMPLES, default=None, metavar="N",
                    help="how many of the study's worst samples (1 to 20, default 4)")
     add_workers_option(p)
     add_common_options(p, plots=True)
@@ -144,6 +145,9 @@ def run(args) -> int:
     """
     from .. import interrupt, progress
 
+    if args.spread_samples is not None and args.spread_from is None:
+        raise UsageError("--spread-samples counts the worst samples of --spread-from STUDY; "
+                         "give --spread-from too, or drop --spread-samples")
     with progress.task(f"loading {args.axis}"):
         from .. import report, summary
         from ..axis import load_axis
@@ -158,7 +162,7 @@ def run(args) -> int:
 
         from ..study.spread import spread_from_study
 
-        samples = spread_from_study(args.spread_from, args.spread_samples)
+        samples = spread_from_study(args.spread_from, args.spread_samples or 4)
         spread_note = getattr(samples, "note", None)
         axis = dataclasses.replace(axis, tuning=dataclasses.replace(
             axis.tuning, friction_samples=samples))
