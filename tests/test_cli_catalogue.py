@@ -444,6 +444,11 @@ CASES = [
                  for v in (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0)])], 1,
      "stribeck.csv: column v_m_per_s reaches 1000 m/s, past any guide way (10 m/s); give the "
      "speeds in m/s"),
+    ("fit-with-the-damping-flags", lambda t, s: ["friction", "--amplitude", "1e-6",
+                                                 "--frequency-hz", "50", "fit",
+                                                 stribeck_csv(t)], 2,
+     "--amplitude, --frequency-hz set the equivalent damping of 'servotune friction', not the "
+     "fit: drop them"),
     ("fit-fix-without-value", lambda t, s: ["friction", "fit", stribeck_csv(t), "--fix",
                                             "delta"], 1, "NAME=VALUE"),
     ("frf-missing-file", lambda t, s: ["lobes", "--frf", str(t / "frf.csv")], 1, "frf.csv"),
@@ -507,6 +512,10 @@ CASES = [
     ("modes-axis-is-a-text-file", lambda t, s: ["modes", text_file(t, "notes.txt", "hello")],
      1, "notes.txt: not valid TOML (Expected '=' after a key in a key/value pair (at end of "
         "document)); give the axis folder (the one holding axis.toml)"),
+    ("lobes-intervals-without-sdm", lambda t, s: ["lobes", *MODE, "--intervals", "8"], 2,
+     "--intervals sets the semi-discretisation: add --method sdm, or drop it"),
+    ("lobes-depth-max-without-sdm", lambda t, s: ["lobes", *MODE, "--depth-max-mm", "3"], 2,
+     "--depth-max-mm sets the semi-discretisation"),
     ("lobes-no-compliance", lambda t, s: ["lobes"], 2, "give the compliance"),
     ("lobes-two-sources", lambda t, s: ["lobes", str(PAPER), *MODE], 2, "one source"),
     ("table3-workers", lambda t, s: ["table3", "--workers", "0"], 2, "--workers"),

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ._common import (
     RunOutput,
+    UsageError,
     add_common_options,
     number,
     print_json,
@@ -51,10 +52,10 @@ def add_parser(subparsers) -> None:
     names = PARAMETER_SETS
     p.add_argument("--params", choices=names, default="bianchi2014",
                    help="named LuGre parameter set (default: the paper's, bianchi2014)")
-    p.add_argument("--amplitude", type=_AMPLITUDE, default=2e-6,
-                   help="displacement amplitude A [m] (default 2e-6)")
-    p.add_argument("--frequency-hz", type=_FREQUENCY, default=20.0,
-                   help="vibration frequency [Hz] (default 20)")
+    p.add_argument("--amplitude", type=_AMPLITUDE, default=None,
+                   help=f"displacement amplitude A [m] (default {AMPLITUDE:g})")
+    p.add_argument("--frequency-hz", type=_FREQUENCY, default=None,
+                   help=f"vibration frequency [Hz] (default {FREQUENCY_HZ:g})")
     p.add_argument("--sigma1-decay-speed", type=_DECAY_SPEED, default=None, metavar="V_D",
                    help="velocity-dependent micro-damping sigma1 exp(-(v/V_D)^2), V_D [m/s] "
                         "(default: the constant sigma1 of the set)")
@@ -101,6 +102,8 @@ def run(args) -> int:
         from ..friction import equivalent, lugre
 
     params = lugre.LuGreParameters.named(args.params)
+    args.amplitude = AMPLITUDE if args.amplitude is None else args.amplitude
+    args.frequency_hz = FREQUENCY_HZ if args.frequency_hz is None else args.frequency_hz
     if args.sigma1_decay_speed is not None:
         params = dataclasses.replace(params, sigma1_decay_speed=args.sigma1_decay_speed)
     omega = 2.0 * math.pi * args.frequency_hz
@@ -164,6 +167,8 @@ def run(args) -> int:
     return 0
 
 
+#: the vibration the equivalent damping is computed at when not given: A [m], f [Hz]
+AMPLITUDE, FREQUENCY_HZ = 2e-6, 20.0
 FIXABLE = ("fc", "fs", "vs", "delta", "sigma2")  # the steady-state parameters
 #: the values a fixed parameter may take: (low, high, unit, whether low itself is allowed);
 #: the ranges of an axis file's [friction.lugre] (servotune.axis.LUGRE_RANGES)
@@ -219,6 +224,15 @@ def run_fit(args) -> int:
     with progress.task("loading the friction models"):
         from ..friction import identify, lugre
 
+    unused = [flag for flag, value in (("--amplitude", args.amplitude),
+                                       ("--frequency-hz", args.frequency_hz),
+                                       ("--sigma1-decay-speed", args.sigma1_decay_speed))
+              if value is not None]
+    if unused:
+        raise UsageError(f"{', '.join(unused)} {'set' if len(unused) > 1 else 'sets'} the "
+                         "equivalent damping of 'servotune friction', not the fit: drop "
+                         f"{'them' if len(unused) > 1 else 'it'} (or run 'servotune friction' "
+                         "without fit)")
     base = lugre.LuGreParameters.named(getattr(args, "params", "bianchi2014"))
     data = identify.read_friction_csv(args.data)
     fixed = _fixed(args.fix)

@@ -236,6 +236,14 @@ def run(args) -> int:
     """
     from .. import progress
 
+    if args.method == "zoa":  # flags of the semi-discretisation only
+        unused = [flag for flag, value in (("--intervals", args.intervals),
+                                           ("--depth-max-mm", args.depth_max_mm))
+                  if value is not None]
+        if unused:
+            raise UsageError(f"{' and '.join(unused)} {'set' if len(unused) > 1 else 'sets'} "
+                             "the semi-discretisation: add --method sdm, or drop "
+                             f"{'them' if len(unused) > 1 else 'it'}")
     with progress.task("loading the compliance"):
         from .. import chatter
 
