@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,7 +30,7 @@ from .closed_loop import axis_compliance
 from .digital import SampledAxis
 from .drive import PIController
 from .plant import Contact
-from .regimes import RegimeModel, regime_models
+from .regimes import RegimeModel, as_law, regime_models
 from .thrust import CRealisation, c_realisations, thrust_budget
 from .tuning import (
     LOWPASS_VARIABLES,
@@ -46,6 +47,10 @@ from .tuning import (
     tune,
 )
 from .units import HZ_PER_RAD_S
+
+if TYPE_CHECKING:   # types of the results only (the modules are imported where they run)
+    from .chatter import StabilityLobes
+    from .verdict import Verdict
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -110,8 +115,8 @@ def process_amplitude(axis: Axis, drive, c: float, force_pp: float,
         Viscous guide-way damping C [N s/m] added to sigma1 in the presliding contact.
     force_pp : float
         Peak-to-peak work-piece force [N].
-    friction : LuGreParameters, optional
-        LuGre parameters of the pads; default ``axis.friction.lugre``.
+    friction : FrictionLaw or LuGreParameters, optional
+        The pads' friction law; default the axis' (``axis.friction.law``).
 
     Returns
     -------
@@ -120,10 +125,11 @@ def process_amplitude(axis: Axis, drive, c: float, force_pp: float,
     frequency : float
         Angular frequency [rad/s] of the compliance peak.
     """
-    p = axis.friction.lugre if friction is None else friction
+    law = as_law(axis.friction.law if friction is None else friction)
     omega = 2 * math.pi * np.geomspace(*(np.array(axis.requirements.band) / (2 * math.pi)),
                                        3000)
-    contact = Contact.stiction(p.sigma0, p.sigma1, c)
+    k, d = law.with_viscous(0.0).presliding()
+    contact = Contact.stiction(k, d, c) if k > 0 else Contact.viscous(d + c)
     h = axis_compliance(axis.structure, omega, drive, contact, axis.pads,
                         outputs=("wp.x", *axis.pads))
     i = int(np.argmax(np.abs(h[0])))
@@ -164,12 +170,12 @@ def axis_regimes(axis: Axis, c: float | None = None) -> tuple[RegimeModel, ...]:
     if op.standing:
         force = op.process_force_pp or 600.0
         amplitude, frequency = process_amplitude(axis, None, c, force)
-    models = regime_models(axis.friction.lugre, op, amplitude, frequency,
+    models = regime_models(axis.friction.law, op, amplitude, frequency,
                            dict(axis.tuning.friction_spread),
                            extra_samples=axis.tuning.friction_samples)
     if not op.feed_speeds:
         speed = op.rapid_speed or 0.1
-        models += (RegimeModel(f"traverse {speed * 1e3:.3g} mm/s", "sliding", axis.friction.lugre,
+        models += (RegimeModel(f"traverse {speed * 1e3:.3g} mm/s", "sliding", axis.friction.law,
                                speed=speed, cutting=False),)
     return models
 
@@ -247,7 +253,7 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
     if drive is not None and "c" not in (bounds or {}):
         # the guide ways' own viscous friction is the floor: a design may add damping, not
         # take away what the guide ways have (give [tuning] c = [low, high] to allow it)
-        b["c"] = (max(b["c"][0], axis.friction.lugre.sigma2), b["c"][1])
+        b["c"] = (max(b["c"][0], axis.friction.law.viscous_part), b["c"][1])
     problem_bounds = {"c": b["c"]}
     if "c" in free:  # start inside the bounds (the axis' value is the "before" design only)
         c0 = min(max(c0, b["c"][0]), b["c"][1])
@@ -276,7 +282,8 @@ def tuning_problem(axis: Axis, free=("c", "kv", "kp", "ti"), chatter_weight: flo
 
     requirements = replace(axis.requirements, band=band)
     models = axis_regimes(axis, c0) if regimes is None else tuple(regimes)
-    budget = thrust_budget(drive, axis.friction.lugre, axis.operation, axis.structure, axis.pads,
+    budget = thrust_budget(drive, None if axis.friction is None else axis.friction.law,
+                           axis.operation, axis.structure, axis.pads,
                            axis.requirements.thrust_margin)
     return TuningProblem(axis.structure, axis.pads, c=c0, drive=drive, free=free,
                          bounds=problem_bounds, requirements=requirements, chatter=chatter,
@@ -649,11 +656,11 @@ class AxisTuning:
     loops_after: analysis.LoopReport | None = None
     compliance_before: tuple = ()
     compliance_after: tuple = ()
-    lobes_before: object = None
-    lobes_after: object = None
+    lobes_before: StabilityLobes | None = None
+    lobes_after: StabilityLobes | None = None
     two_mass: TwoMassCheck | None = None
     mode_peaks: ModePeaks | None = None
-    verdict: object = None
+    verdict: Verdict | None = None
     thrust_before: dict | None = None
     thrust_after: dict | None = None
     c_realisation: tuple[CRealisation, ...] = ()
@@ -1055,10 +1062,6 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     servotune.tuning.solve.tune : the optimisation this runs.
     servotune.tuning.verify.verify : the dense linear check of a design.
     """
-    if axis.friction is not None and axis.drive is not None:
-        # the regime models of a driven axis take the LuGre contact (without a drive the
-        # viscous pads alone are tuned, with any law)
-        axis.friction.require_lugre("servotune tune")
     settings = axis.tuning
     free = expand_free(settings.free if free is None else free)
     chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight
@@ -1256,7 +1259,6 @@ def baseline_comparison(axis: Axis, regimes, simulate: bool = True,
     from .frequency import peak
     from .harmonic import ConvergenceError
     from .plant import UnstableLoopError
-    from .simulate.contact import LuGreFriction
     from .simulate.simulator import NonlinearAxis
     from .verdict import FEEDING_LEVELS, harmonic_scan, verdict_spread
 
@@ -1282,8 +1284,8 @@ def baseline_comparison(axis: Axis, regimes, simulate: bool = True,
             nonlinear = None
             if simulate and math.isfinite(claim):
                 drive = dataclasses.replace(b.drive, velocity_feedforward=1.0)
-                lugre = dataclasses.replace(axis.friction.lugre, sigma2=float(b.c))
-                nl = NonlinearAxis(axis.structure, drive, axis.pads, LuGreFriction(lugre))
+                nl = NonlinearAxis(axis.structure, drive, axis.pads,
+                                   axis.friction.law.with_viscous(float(b.c)))
                 try:
                     scan = harmonic_scan(nl, speed, [process * k for k in FEEDING_LEVELS],
                                          band_hz)
@@ -1563,9 +1565,12 @@ def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress
             out["process"] = {"force_pp_n": force, "pad_amplitude_m": amp,
                               "frequency_hz": freq * HZ_PER_RAD_S,
                               "feed_force_n": axis.operation.feed_force}
+        law = axis.friction.law
+        stiffness = law.presliding()[0]
         out["c_realisation"] = c_realisations(problem.thrust, result.design.c,
-                                              axis.friction.lugre.sigma2, amp, freq,
-                                              axis.friction.lugre.sigma0, axis.operation)
+                                              law.viscous_part, amp, freq,
+                                              stiffness if stiffness > 0 else None,
+                                              axis.operation)
     if (axis.drive is not None and not result.before.stable
             and not axis.drive.digital.is_continuous and given is None):
         moving = problem.moving_models
@@ -1645,10 +1650,12 @@ def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress
         # no drive, no friction law: the viscous model is the system itself, and the dense
         # check of it is the whole verification
         out["verdict"] = Verdict(
-            result.success, result.success, None, (), 0.0, tuple(result.reasons),
-            ("linear: the viscous pads without a drive are the system itself (the paper's "
-             "sec 4.1 analysis); the dense check of the compliance is the whole verification",),
-            ())
+            verified=result.success, linear_holds=result.success, nonlinear_holds=None,
+            regimes=(), tolerance=0.0, reasons=tuple(result.reasons),
+            checked=("linear: the viscous pads without a drive are the system itself (the "
+                     "paper's sec 4.1 analysis); the dense check of the compliance is the whole "
+                     "verification",),
+            not_checked=())
     verdict = out.get("verdict")
     if verdict is not None and verdict.verified:
         # a claim is verified only where the structure model holds: a reduced model whose

@@ -44,8 +44,9 @@ from types import MappingProxyType
 import control
 import numpy as np
 
-from .friction.equivalent import describing_function
-from .friction.lugre import LuGreParameters, sliding_linearisation, stribeck_curve
+from .friction.law import FrictionLaw
+from .friction.laws.lugre import LuGreFriction
+from .friction.lugre import LuGreParameters
 from .plant import Contact
 from .units import HZ_PER_RAD_S
 from .validation import positive
@@ -58,6 +59,7 @@ __all__ = [
     "RegimeModel",
     "friction_samples",
     "friction_spread",
+    "as_law",
     "regime_models",
     "stribeck_slope",
 ]
@@ -142,6 +144,31 @@ class Operation:
                 "defaults": list(self.defaults)}
 
 
+def as_law(friction) -> FrictionLaw | None:
+    """Return the friction as a law: a :class:`~servotune.friction.law.FrictionLaw` as it is,
+    LuGre parameters as :class:`~servotune.friction.laws.lugre.LuGreFriction`, None as None.
+
+    Parameters
+    ----------
+    friction : FrictionLaw, LuGreParameters or None
+        The friction (axis totals).
+
+    Returns
+    -------
+    FrictionLaw or None
+
+    Raises
+    ------
+    ValueError
+        For anything else (the message names what was given).
+    """
+    if friction is None or isinstance(friction, FrictionLaw):
+        return friction
+    if isinstance(friction, LuGreParameters):
+        return LuGreFriction(friction)
+    raise ValueError(f"the friction must be a FrictionLaw or LuGreParameters, got {friction!r}")
+
+
 def stribeck_slope(params: LuGreParameters, speed: float) -> float:
     """Return dF/dv of the steady sliding friction, sigma2 included.
 
@@ -176,11 +203,13 @@ class RegimeModel:
         The operating regime it belongs to (``"standing"``, ``"feeding 30 mm/s"``,
         ``"viscous"``); a regime's claim is the worst of its models.
     kind : {"presliding", "describing", "sliding", "viscous"}
-        The guide-way model: LuGre presliding (spring sigma0, damper sigma1), the LuGre
-        describing function at ``amplitude`` and ``frequency``, LuGre linearised about steady
-        sliding at ``speed``, or the viscous damper C alone.
-    friction : LuGreParameters, optional
-        The friction (axis totals) of the model; its sigma2 is replaced by the design's C.
+        The guide-way model: the law's presliding contact (for LuGre the spring sigma0 and the
+        damper sigma1), its describing function at ``amplitude`` and ``frequency``, the law
+        linearised about steady sliding at ``speed``, or the viscous damper C alone.
+    friction : FrictionLaw or LuGreParameters, optional
+        The friction law (axis totals) of the model; its viscous part is replaced by the
+        design's C (:meth:`~servotune.friction.law.FrictionLaw.with_viscous`). LuGre
+        parameters are taken as :class:`~servotune.friction.laws.lugre.LuGreFriction`.
     speed : float
         Sliding speed [m/s] (feeding models).
     amplitude, frequency : float, optional
@@ -195,13 +224,13 @@ class RegimeModel:
     Raises
     ------
     ValueError
-        If ``kind`` is unknown, a non-viscous model has no LuGre friction, a sliding model no
+        If ``kind`` is unknown, a non-viscous model has no friction law, a sliding model no
         speed > 0, or a describing-function model no finite amplitude and frequency > 0.
     """
 
     regime: str
     kind: str
-    friction: LuGreParameters | None = None
+    friction: FrictionLaw | None = None
     speed: float = 0.0
     amplitude: float | None = None
     frequency: float | None = None
@@ -212,16 +241,19 @@ class RegimeModel:
     def __post_init__(self) -> None:
         if self.kind not in REGIME_KINDS:
             raise ValueError(f"RegimeModel.kind must be one of {REGIME_KINDS}, got {self.kind!r}")
-        if self.kind != "viscous" and not isinstance(self.friction, LuGreParameters):
-            raise ValueError(f"a {self.kind} model needs the LuGre friction of the axis")
+        if isinstance(self.friction, LuGreParameters):
+            object.__setattr__(self, "friction", LuGreFriction(self.friction))
+        if self.kind != "viscous" and not isinstance(self.friction, FrictionLaw):
+            raise ValueError(f"a {self.kind} model needs the friction law of the axis, got "
+                             f"{self.friction!r}")
         if self.kind == "sliding":
             positive("RegimeModel", "speed", self.speed, "m/s", "a sliding model moves")
         if self.kind == "describing":
             for name, unit in (("amplitude", "m"), ("frequency", "rad/s")):
                 positive("RegimeModel", name, getattr(self, name), unit,
                          "a describing-function model needs it")
-            base = dataclasses.replace(self.friction, sigma2=0.0)
-            ceq, keq = describing_function(base, self.amplitude, self.frequency)
+            base = self.friction.with_viscous(0.0)
+            ceq, keq = base.describing_function(self.amplitude, self.frequency)
             object.__setattr__(self, "_keq_ceq", (float(keq), float(ceq)))
 
     @property
@@ -237,10 +269,12 @@ class RegimeModel:
     def impedance(self, omega) -> np.ndarray:
         """Return the contact impedance without the viscous part, Z_0(jw) (axis total).
 
-        The pad force per pad displacement: 0 for the viscous model; ``sigma0 + jw sigma1``
-        presliding; ``Keq + jw Ceq`` for the describing function (computed with sigma2 = 0);
-        ``jw G(jw)`` sliding, with G the LuGre sliding linearisation (sigma2 = 0) from velocity
-        to force (:func:`servotune.friction.lugre.sliding_linearisation`).
+        The pad force per pad displacement: 0 for the viscous model; ``k + jw d`` presliding
+        (the law's presliding spring and damper without its viscous part; LuGre: sigma0,
+        sigma1); ``Keq + jw Ceq`` for the describing function (computed without the viscous
+        part); ``jw G(jw)`` sliding, with G the law's sliding linearisation without its viscous
+        part, from velocity to force
+        (:meth:`~servotune.friction.law.FrictionLaw.sliding_system`).
 
         Parameters
         ----------
@@ -253,17 +287,28 @@ class RegimeModel:
             Complex impedance [N/m], the shape of ``omega``.
         """
         s = 1j * np.asarray(omega, dtype=float)
-        p = self.friction
         if self.kind == "viscous":
             return np.zeros_like(s)
+        base = self.friction.with_viscous(0.0)
         if self.kind == "presliding":
-            return p.sigma0 + s * p.sigma1
+            k, d = base.presliding()
+            return k + s * d
         if self.kind == "describing":
             keq, ceq = self._keq_ceq
             return keq + s * ceq
-        sys = sliding_linearisation(dataclasses.replace(p, sigma2=0.0), self.speed)
-        a, b, c, d = (float(np.asarray(m).ravel()[0]) for m in (sys.A, sys.B, sys.C, sys.D))
-        return s * (c * b / (s - a) + d)
+        sys = base.sliding_system(self.speed)
+        a, b = np.atleast_2d(np.asarray(sys.A, float)), np.asarray(sys.B, float)
+        c, d = np.asarray(sys.C, float), float(np.asarray(sys.D).ravel()[0])
+        if sys.nstates == 0:
+            return s * d
+        if sys.nstates == 1:
+            a, b, c = float(a[0, 0]), float(b.ravel()[0]), float(c.ravel()[0])
+            return s * (c * b / (s - a) + d)
+        lam, vec = np.linalg.eig(a)   # G(s) = (C V) diag(1/(s - lam)) (V^-1 B) + D
+        left = (c @ vec).ravel()
+        right = np.linalg.solve(vec, b).ravel()
+        g = (left * right / (s[..., None] - lam)).sum(axis=-1) + d
+        return s * g
 
     def contact(self, c: float) -> Contact:
         """Return the python-control contact of the model with total viscous damping ``c``.
@@ -271,21 +316,23 @@ class RegimeModel:
         Parameters
         ----------
         c : float
-            Total viscous guide-way damping C [N s/m], in place of the LuGre sigma2.
+            Total viscous guide-way damping C [N s/m], in place of the law's viscous part.
 
         Returns
         -------
         Contact
-            ``Contact.viscous(c)``; presliding ``Contact.stiction(sigma0, sigma1, c)``;
-            describing function a sliding contact ``F = Keq x + (Ceq + c) v``; sliding the
-            LuGre sliding linearisation with sigma2 = c at the model's speed.
+            ``Contact.viscous(c)``; presliding ``Contact.stiction(k, d, c)`` with the law's
+            presliding spring and damper without its viscous part (a law without a presliding
+            spring: ``Contact.viscous(d + c)``); describing function a sliding contact
+            ``F = Keq x + (Ceq + c) v``; sliding the law's sliding linearisation with the
+            viscous part c at the model's speed.
         """
         c = float(c)
         if self.kind == "viscous":
             return Contact.viscous(c)
-        p = self.friction
         if self.kind == "presliding":
-            return Contact.stiction(p.sigma0, p.sigma1, c)
+            k, d = self.friction.with_viscous(0.0).presliding()
+            return Contact.stiction(k, d, c) if k > 0 else Contact.viscous(d + c)
         if self.kind == "describing":
             keq, ceq = self._keq_ceq
             element = control.ss([[0.0]], [[1.0]], [[keq]], [[ceq + c]])
@@ -293,8 +340,8 @@ class RegimeModel:
                            note=f"describing function at A = {self.amplitude:.3g} m, "
                                 f"{self.frequency * HZ_PER_RAD_S:.1f} Hz: Keq = {keq:.3g} N/m, "
                                 f"Ceq = {ceq + c:.3g} N s/m")
-        return Contact.sliding(sliding_linearisation(dataclasses.replace(p, sigma2=c),
-                                                     self.speed), self.speed)
+        return Contact.sliding(self.friction.with_viscous(c).sliding_system(self.speed),
+                               self.speed)
 
     def with_amplitude(self, amplitude: float, frequency: float) -> RegimeModel:
         """Return the model at another amplitude and frequency.
@@ -321,17 +368,18 @@ class RegimeModel:
         return dataclasses.replace(self, amplitude=float(amplitude), frequency=float(frequency))
 
     def slope(self) -> float | None:
-        """Return the sliding model's steady friction slope dF/dv with sigma2 = 0.
+        """Return the sliding model's steady friction slope dF/dv without the viscous part.
 
         Returns
         -------
         float or None
-            ``g'(v) sgn(v)`` [N s/m] at the model's speed (see :func:`stribeck_slope`); None
-            when the model is not a sliding one.
+            For LuGre ``g'(v) sgn(v)`` [N s/m] at the model's speed (see
+            :meth:`~servotune.friction.law.FrictionLaw.steady_slope`); None when the model is
+            not a sliding one.
         """
         if self.kind != "sliding":
             return None
-        return stribeck_slope(dataclasses.replace(self.friction, sigma2=0.0), self.speed)
+        return self.friction.with_viscous(0.0).steady_slope(self.speed)
 
     def to_dict(self) -> dict:
         """Return the model as JSON-ready data.
@@ -345,14 +393,16 @@ class RegimeModel:
             friction level g(v) [N].
         """
         out = {"regime": self.regime, "model": self.kind, "name": self.name,
-               "sample": self.sample, "speed_m_per_s": self.speed, "cutting": self.cutting}
+               "sample": self.sample, "speed_m_per_s": self.speed, "cutting": self.cutting,
+               "friction_law": None if self.friction is None else self.friction.name}
         if self.kind == "describing":
             keq, ceq = self._keq_ceq
             out.update(amplitude_m=self.amplitude, frequency_hz=self.frequency * HZ_PER_RAD_S,
                        keq=keq, ceq_without_c=ceq)
         if self.kind == "sliding":
             out["friction_slope_without_c"] = self.slope()
-            out["friction_level_n"] = float(stribeck_curve(self.friction, self.speed))
+            out["friction_level_n"] = abs(self.friction.with_viscous(0.0).steady_force(
+                self.speed))
         return out
 
 
@@ -428,8 +478,9 @@ def regime_models(friction: LuGreParameters | None, operation: Operation | None,
 
     Parameters
     ----------
-    friction : LuGreParameters, optional
-        The axis' friction (None: the viscous model alone).
+    friction : FrictionLaw or LuGreParameters, optional
+        The axis' friction law (None: the viscous model alone). A spread and extra samples
+        vary LuGre parameters: they need a LuGre law.
     operation : Operation, optional
         How the axis works (None: the viscous model alone).
     amplitude, frequency : float, optional
@@ -455,8 +506,19 @@ def regime_models(friction: LuGreParameters | None, operation: Operation | None,
     """
     if viscous_only or friction is None or operation is None:
         return (RegimeModel("viscous", "viscous"),)
+    law = as_law(friction)
+    lugre = getattr(law, "lugre_parameters", None)
+    if lugre is not None:
+        samples = [(label, LuGreFriction(p))
+                   for label, p in friction_samples(lugre, spread, extra_samples)]
+    elif spread or extra_samples:
+        raise ValueError(f"a friction spread and friction samples vary LuGre parameters; the "
+                         f"axis' friction law is {law.name!r} (remove [tuning] friction_spread "
+                         f"and --spread-from, or describe the guide ways with [friction.lugre])")
+    else:
+        samples = [("nominal", law)]
     models = []
-    for label, params in friction_samples(friction, spread, extra_samples):
+    for label, params in samples:
         if operation.standing:
             models.append(RegimeModel("standing", "presliding", params, sample=label))
             if amplitude is not None and frequency is not None:

@@ -31,11 +31,110 @@ Loop hierarchy, with their defaults and where they come from:
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from .validation import positive
 
-__all__ = ["Requirements"]
+__all__ = ["Requirements", "Setting"]
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A setting a requirement declares: a key of ``[requirements]`` in an axis file.
+
+    A requirement of another package (:class:`servotune.tuning.constraint.Requirement`,
+    ``settings``) declares what it reads; the axis file's validation, ``servotune init``'s
+    template and the report take name, unit, default, range and help from here.
+
+    Parameters
+    ----------
+    name : str
+        The key (a lower-case identifier, SI value; a unit suffix such as ``_m`` is welcome).
+    unit : str
+        The SI unit, as text (``"m"``, ``"1/s"``, ``"-"``).
+    default : float or None
+        The value when the axis file does not give one; None: the requirement is off then.
+    low, high : float
+        The accepted range (inclusive): a plausibility range that catches unit slips.
+    help : str
+        One line on what it means and where its default comes from.
+
+    Raises
+    ------
+    ValueError
+        A name that is not a lower-case identifier, ``low > high`` or a default outside the
+        range.
+
+    Examples
+    --------
+    >>> s = Setting("following_error_max_m", "m", None, 1e-7, 1e-2,
+    ...             "largest following error at the highest feed speed")
+    >>> s.parse(2e-4)
+    0.0002
+    >>> s.parse(0.2)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: following_error_max_m = 0.2 m is outside [1e-07, 0.01] m (largest ...)
+    """
+
+    name: str
+    unit: str
+    default: float | None
+    low: float
+    high: float
+    help: str
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name.isidentifier()
+                and self.name == self.name.lower()):
+            raise ValueError(f"a setting's name must be a lower-case identifier, got "
+                             f"{self.name!r}")
+        low, high = float(self.low), float(self.high)
+        if not low <= high:
+            raise ValueError(f"setting {self.name}: low ({low!r}) must not exceed high "
+                             f"({high!r})")
+        object.__setattr__(self, "low", low)
+        object.__setattr__(self, "high", high)
+        if self.default is not None:
+            object.__setattr__(self, "default", self.parse(self.default))
+
+    def parse(self, value) -> float:
+        """Return the value as a float, or refuse it naming the key, the range and the unit.
+
+        Parameters
+        ----------
+        value : object
+            The value as the axis file gives it.
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        ValueError
+            Not a finite number, or outside ``[low, high]``.
+        """
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{self.name} must be a number in {self.unit}, got {value!r} "
+                             f"({self.help})")
+        value = float(value)
+        if not (math.isfinite(value) and self.low <= value <= self.high):
+            raise ValueError(f"{self.name} = {value!r} {self.unit} is outside [{self.low:g}, "
+                             f"{self.high:g}] {self.unit} ({self.help})")
+        return value
+
+    def to_dict(self) -> dict:
+        """Return the declaration as JSON-ready data (SI).
+
+        Returns
+        -------
+        dict
+            ``name``, ``unit``, ``default``, ``low``, ``high``, ``help``.
+        """
+        return {"name": self.name, "unit": self.unit, "default": self.default,
+                "low": self.low, "high": self.high, "help": self.help}
 
 
 @dataclass(frozen=True)
@@ -71,6 +170,11 @@ class Requirements:
         a nonzero maximum must exceed the minimum).
     nonlinear_tolerance : float
         How far above the design's claim the nonlinear axis may peak, >= 0 (0.3: 30 %).
+    settings : Mapping of str to float, or pairs
+        The values the axis file gives for settings that requirements of other packages
+        declare (:class:`Setting`), by name, validated against their declarations when the
+        axis is read; kept as sorted (name, value) pairs (hashable, picklable); read them with
+        :meth:`value`.
 
     Raises
     ------
@@ -92,8 +196,13 @@ class Requirements:
     ti_bandwidth_min: float = 3.0
     ti_bandwidth_max: float = 30.0
     nonlinear_tolerance: float = 0.3
+    settings: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
+        pairs = dict(self.settings.items() if isinstance(self.settings, Mapping)
+                     else self.settings)
+        object.__setattr__(self, "settings", tuple(sorted((str(k), float(v))
+                                                          for k, v in pairs.items())))
         for name in ("thrust_margin", "bandwidth_ratio_min", "current_bandwidth_ratio_min",
                      "ti_bandwidth_min", "ti_bandwidth_max", "nonlinear_tolerance"):
             object.__setattr__(self, name, positive("Requirements", name, getattr(self, name),
@@ -127,6 +236,21 @@ class Requirements:
                 raise ValueError(f"Requirements.{name} must be (low, high) with 0 < low < high "
                                  f"rad/s, got {getattr(self, name)!r}")
             object.__setattr__(self, name, (lo, hi))
+
+    def value(self, setting: Setting) -> float | None:
+        """Return a declared setting's value: the axis file's, else its default.
+
+        Parameters
+        ----------
+        setting : Setting
+            The declaration.
+
+        Returns
+        -------
+        float or None
+            None when neither is given (the requirement is off).
+        """
+        return dict(self.settings).get(setting.name, setting.default)
 
     def ms_limit(self, loop: str) -> float:
         """Return the Ms limit of a loop, tightened by the margin requirements.

@@ -102,8 +102,43 @@ def inputs_table(job) -> Table:
                  f"; thrust reserve {req.thrust_margin:.0%}; nonlinear tolerance "
                  f"{req.nonlinear_tolerance:.0%}; band {req.band[0] * HZ_PER_RAD_S:.3g}-"
                  f"{req.band[1] * HZ_PER_RAD_S:.3g} Hz"))
+    rows += setting_rows(req)
     notes = tuple(f"default taken: {d}" for d in job.notes)
     return Table("Inputs and requirements", ("", "", ""), tuple(rows), notes)
+
+
+def setting_rows(requirements) -> list[tuple[str, str, str]]:
+    """Return one row per requirement of another package that declares settings: its
+    settings' values (the axis file's or the declared defaults) with units and ranges.
+
+    Parameters
+    ----------
+    requirements : servotune.requirements.Requirements
+        The requirements of the problem.
+
+    Returns
+    -------
+    list of (str, str, str)
+        ``(requirement, values, help)``; empty when no installed requirement declares any.
+    """
+    from .tuning.constraint import declared_settings
+
+    by_owner: dict[str, list] = {}
+    for key, (setting, owner) in sorted(declared_settings().items()):
+        by_owner.setdefault(owner, []).append((key, setting))
+    rows = []
+    for owner, items in by_owner.items():
+        values, helps = [], []
+        for key, setting in items:
+            value = requirements.value(setting)
+            given = key in dict(requirements.settings)
+            values.append(f"{key} = " + ("off (not given)" if value is None else
+                                         f"{value:g} {setting.unit}"
+                                         + ("" if given else " (default)")))
+            helps.append(f"{key}: {setting.help}, in [{setting.low:g}, {setting.high:g}] "
+                         f"{setting.unit}")
+        rows.append((f"requirement {owner}", "; ".join(values), "; ".join(helps)))
+    return rows
 
 
 def design_table(job) -> Table:

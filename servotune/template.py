@@ -232,13 +232,56 @@ def axis_name_for(folder) -> str:
     return name or "my_axis"
 
 
-def template_toml(name: str = "my_axis") -> str:
+#: The template's last ``[requirements]`` line: the settings of requirement plug-ins follow it.
+_REQUIREMENTS_END = "# nonlinear_tolerance = 0.3 "
+
+
+def setting_lines(declared) -> str:
+    """Return commented ``[requirements]`` lines for settings that requirements declare.
+
+    Parameters
+    ----------
+    declared : Mapping of str to (Setting, str)
+        Name -> (declaration, the declaring requirement), as
+        :func:`servotune.tuning.constraint.declared_settings` returns them.
+
+    Returns
+    -------
+    str
+        One commented line per setting: the default (or the low end of the range when it has
+        none), the unit, the help, the range and the requirement; empty without settings.
+
+    Examples
+    --------
+    >>> from servotune.requirements import Setting
+    >>> line = setting_lines({"e_max_m": (Setting("e_max_m", "m", None, 1e-7, 1e-2,
+    ...                                           "largest error"), "following_error")})
+    >>> line.split("#")[1].strip()
+    'e_max_m = 1e-07'
+    >>> line.split("#")[2].strip()
+    "[m] largest error, in [1e-07, 0.01] (requirement 'following_error'; off when absent)"
+    """
+    lines = []
+    for key, (setting, owner) in sorted(declared.items()):
+        value = setting.low if setting.default is None else setting.default
+        default = ("off when absent" if setting.default is None
+                   else f"default {setting.default:g}")
+        lines.append(f"# {key} = {value:g}".ljust(36) + f"# [{setting.unit}] {setting.help}, "
+                     f"in [{setting.low:g}, {setting.high:g}] (requirement {owner!r}; "
+                     f"{default})")
+    return "\n".join(lines)
+
+
+def template_toml(name: str = "my_axis", settings=None) -> str:
     """Return the commented ``axis.toml`` of the starter axis, with ``[axis] name`` = ``name``.
 
     Parameters
     ----------
     name : str, optional
         The axis name (default "my_axis").
+    settings : Mapping of str to (Setting, str), optional
+        Settings of requirement plug-ins to list (commented) under ``[requirements]``
+        (:func:`setting_lines`).
 
     Returns
     -------
@@ -247,8 +290,13 @@ def template_toml(name: str = "my_axis") -> str:
     """
     if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
         raise ValueError(f"axis name {name!r}: use letters, digits and _ . - only")
-    return _TEMPLATE.replace("{AXIS_NAME}", name).replace(
+    text = _TEMPLATE.replace("{AXIS_NAME}", name).replace(
         "{NAME_PAD}", " " * max(0, 26 - len(name)))
+    extra = setting_lines(settings or {})
+    if extra:
+        at = text.index("\n", text.index(_REQUIREMENTS_END))
+        text = text[:at] + "\n" + extra + text[at:]
+    return text
 
 
 TEMPLATE_TOML = template_toml("my_axis")  # the text with the default name
@@ -279,7 +327,9 @@ def write_template(folder, force: bool = False, name: str = "my_axis") -> list[P
     folder = Path(folder)
     files = [folder / "axis.toml", folder / "structure.npz"]
     check_writable(files, force)
-    text = template_toml(name)
+    from .tuning.constraint import declared_settings
+
+    text = template_toml(name, declared_settings())
     m, k, dofs = template_structure()
     buffer = io.BytesIO()
     np.savez(buffer, mass=m, stiffness=k, dofs=np.array(dofs))

@@ -59,7 +59,9 @@ import scipy.optimize
 
 from .drive import Drive, DriveLimits
 from .friction.equivalent import describing_function
-from .friction.lugre import LuGreParameters, stribeck_curve
+from .friction.law import FrictionLaw
+from .friction.laws.lugre import LuGreFriction
+from .friction.lugre import LuGreParameters
 from .regimes import Operation
 from .structure.model import ModalModel
 
@@ -174,8 +176,10 @@ class ThrustBudget:
         Fraction kept in reserve.
     mass : float
         Moving mass referred to the slide [kg].
-    friction : LuGreParameters
-        Axis-total friction (its sigma2 is replaced by the C of each evaluation).
+    friction : FrictionLaw or LuGreParameters
+        Axis-total friction law (its viscous part is replaced by the C of each evaluation; its
+        steady sliding friction without it, :meth:`~servotune.friction.law.FrictionLaw.
+        steady_force`, is g(v)). LuGre parameters are taken as their law.
     operation : Operation
     limits : DriveLimits, optional
         The motor's torques over speed (:meth:`DriveLimits.peak`, :meth:`DriveLimits.continuous`)
@@ -209,12 +213,20 @@ class ThrustBudget:
     thrust_continuous: float
     margin: float
     mass: float
-    friction: LuGreParameters
+    friction: FrictionLaw
     operation: Operation
     limits: DriveLimits | None = None
     ratio: float | None = None
 
     def __post_init__(self) -> None:
+        law = LuGreFriction(self.friction) if isinstance(self.friction, LuGreParameters) \
+            else self.friction
+        if not isinstance(law, FrictionLaw):
+            raise ValueError(f"ThrustBudget.friction must be a FrictionLaw or LuGreParameters, "
+                             f"got {self.friction!r}")
+        object.__setattr__(self, "friction", law)
+        # the law without its viscous part: g(v) (the viscous part is C v of each case)
+        object.__setattr__(self, "_dry", law.with_viscous(0.0))
         if (self.limits is None) != (self.ratio is None):
             raise ValueError("ThrustBudget: give limits and ratio together (the torque-speed "
                              "curve at the motor and the transmission to the slide), or neither")
@@ -283,7 +295,7 @@ class ThrustBudget:
         return self.limits.continuous(v / self.ratio) / self.ratio
 
     def _coulomb(self, v: float) -> float:
-        return float(stribeck_curve(self.friction, v))
+        return abs(float(self._dry.steady_force(v))) if v else 0.0
 
     def _case(self, name, v, kind, terms, extra_friction) -> ThrustCase:
         if extra_friction:
@@ -403,7 +415,7 @@ class ThrustBudget:
                 "cases": [x.to_dict() for x in cases]}
 
 
-def thrust_budget(drive: Drive | None, friction: LuGreParameters | None,
+def thrust_budget(drive: Drive | None, friction: FrictionLaw | LuGreParameters | None,
                   operation: Operation | None, structure: ModalModel, pads,
                   margin: float) -> ThrustBudget | None:
     """Return the thrust budget of an axis, or None when it cannot be drawn up.
@@ -413,8 +425,8 @@ def thrust_budget(drive: Drive | None, friction: LuGreParameters | None,
     drive : Drive or None
         The drive; its torque limits (and their torque-speed curve) through the transmission
         give the thrusts at each case's speed.
-    friction : LuGreParameters or None
-        Axis-total guide-way friction.
+    friction : FrictionLaw, LuGreParameters or None
+        Axis-total guide-way friction law.
     operation : Operation or None
         The regimes (feed speeds, rapid speed, acceleration, feed force).
     structure : ModalModel

@@ -6,9 +6,10 @@ verdict holds a design ``verified`` only when
 
 (a) the linear check holds on dense grids in every regime model (stability, Ms, the loop
     hierarchy, the integral time, the thrust budget: :mod:`servotune.tuning.verify`), and
-(b) in every cutting regime the time simulation of the axis with LuGre friction at every pad
-    (the design's C as the viscous part sigma2, the digital drive's delays as in the linear
-    model) peaks at or below the claim within ``nonlinear_tolerance`` (default 30 %), at the
+(b) in every cutting regime the time simulation of the axis with its friction law at every pad
+    (LuGre in the paper, or any law of :mod:`servotune.friction.law`; the design's C as the
+    law's viscous part, for LuGre sigma2; the digital drive's delays as in the linear model)
+    peaks at or below the claim within ``nonlinear_tolerance`` (default 30 %), at the
     process force (the cutting-force amplitude at the required depth), at a larger force (3
     times) and, standing, at a smaller one (a quarter); stays stable (the response decays once
     the force stops); shows no stick-slip limit cycle while feeding (a run at the feed speed
@@ -51,9 +52,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .closed_loop import axis_compliance
+from .friction.law import FrictionLaw
 from .friction.lugre import LuGreParameters
-from .regimes import FrictionSpread, friction_spread
-from .simulate.contact import LuGreFriction
+from .regimes import FrictionSpread, as_law, friction_spread
 from .simulate.result import SimulationError
 from .simulate.scenario import constant_speed, planned_sweep, sweep_plan
 from .simulate.simulator import NonlinearAxis, simulate
@@ -188,8 +189,9 @@ def harmonic_scan(nl_axis: NonlinearAxis, speed: float, forces_pp, band_hz):
     from .harmonic import nonlinear_compliance
     from .simulate.setup import AxisSetup
 
-    setup = AxisSetup("design", nl_axis.structure, nl_axis.drive, tuple(nl_axis.pads),
-                      nl_axis.friction.params, float(nl_axis.friction.params.sigma2))
+    law = nl_axis.friction
+    setup = AxisSetup("design", nl_axis.structure, nl_axis.drive, tuple(nl_axis.pads), None,
+                      float(law.viscous_part), law=law)
     band = (2 * math.pi * band_hz[0], 2 * math.pi * band_hz[1])
     result = nonlinear_compliance(setup, list(forces_pp), speed=speed, band=band,
                                   references=False, describing=False)
@@ -243,8 +245,9 @@ class CornerVerdict:
     ----------
     label : str
         The corner (``"fs +258 N, sigma0 -1.17e9 N/m, sigma1 +1.3e6 N s/m"``).
-    friction : LuGreParameters
-        Its friction (axis totals; sigma2 as identified, the design's C replaces it).
+    friction : LuGreParameters or FrictionLaw
+        Its friction (axis totals; the viscous part as identified, the design's C replaces
+        it).
     claimed_peak : float or None
         Its own linear claim: the worst compliance peak of the regime's models with this
         friction [m/N] (inf: a model is unstable with the design).
@@ -261,7 +264,7 @@ class CornerVerdict:
     """
 
     label: str
-    friction: LuGreParameters
+    friction: LuGreParameters | FrictionLaw
     claimed_peak: float | None
     harmonic: tuple[HarmonicPeak, ...] = ()
     harmonic_note: str = ""
@@ -453,7 +456,7 @@ class RegimeVerdict:
                 "corners": [c.to_dict() for c in self.corners]}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Verdict:
     """Whether a design is verified, and what the verification covered.
 
@@ -719,15 +722,13 @@ def simulate_feeding(axis: NonlinearAxis, speed: float, tags: dict,
                       wall_time=time.perf_counter() - wall)
 
 
-def design_axis(axis, problem, design, friction: LuGreParameters | None = None
-                ) -> NonlinearAxis:
-    """The nonlinear axis of a design: LuGre pads (the axis' friction, or ``friction``) with
-    sigma2 = C, the design's drive with full velocity feed-forward (the axis follows its feed
-    without lag)."""
+def design_axis(axis, problem, design, friction=None) -> NonlinearAxis:
+    """The nonlinear axis of a design: the pads with the axis' friction law (or ``friction``,
+    a law or LuGre parameters) with its viscous part the design's C, the design's drive with
+    full velocity feed-forward (the axis follows its feed without lag)."""
     drive = dataclasses.replace(problem.drive_for(design), velocity_feedforward=1.0)
-    lugre = dataclasses.replace(axis.friction.lugre if friction is None else friction,
-                                sigma2=float(design.c))
-    return NonlinearAxis(axis.structure, drive, axis.pads, LuGreFriction(lugre))
+    law = as_law(axis.friction.law if friction is None else friction)
+    return NonlinearAxis(axis.structure, drive, axis.pads, law.with_viscous(float(design.c)))
 
 
 # --------------------------------------------------------------------------------- verdict
@@ -933,7 +934,7 @@ def _coverage(box, regimes_judged, process, levels_of, corner_levels_of, band_of
         "force_multiples_of_process": multiples,
         "feeds_m_per_s": speeds, "standing": standing,
         "band_hz": {name: list(b) for name, b in band_of.items()},
-        "duty": duty, "simulated": simulated}
+        "duty": duty, "simulated": simulated, "friction_law": _law_name(problem)}
     if box is None:
         text = "at the nominal friction only (no friction spread given)"
     else:
@@ -1265,9 +1266,16 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         default_process)
     checked, not_checked = _checked_lines(problem, verdicts, box if spread_regimes else None,
                                           result)
-    return Verdict(linear_holds and nonlinear_holds, linear_holds, nonlinear_holds,
-                   tuple(verdicts), tol, tuple(reasons), checked, not_checked, coverage,
-                   coverage_text)
+    return Verdict(verified=linear_holds and nonlinear_holds, linear_holds=linear_holds,
+                   nonlinear_holds=nonlinear_holds, regimes=tuple(verdicts), tolerance=tol,
+                   reasons=tuple(reasons), checked=checked, not_checked=not_checked,
+                   coverage=coverage, coverage_text=coverage_text)
+
+
+def _law_name(problem) -> str:
+    """The friction law of the problem's regime models (``"viscous"`` without one)."""
+    names = sorted({m.friction.name for m in problem.regimes if m.friction is not None})
+    return "/".join(names) if names else "viscous"
 
 
 def _checked_lines(problem, verdicts, box, result) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -1283,7 +1291,7 @@ def _checked_lines(problem, verdicts, box, result) -> tuple[tuple[str, ...], tup
         + " and the compliance peak in every regime model (nominal friction"
         + (f" and the tuning's friction samples {', '.join(samples)}" if samples else "")
         + "), on dense grids with python-control",
-        "nonlinear: LuGre friction at every pad, sine sweeps "
+        f"nonlinear: the {_law_name(problem)} friction law at every pad, sine sweeps "
         + "; ".join(f"{v.name} over {v.band_hz[0]:.3g}-{v.band_hz[1]:.3g} Hz at "
                     + ", ".join(f"{f:.3g}" for f in sorted({s.force_pp for s in v.simulations
                                                             if s.kind == "sweep"

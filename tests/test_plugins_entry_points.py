@@ -220,7 +220,7 @@ def test_a_nonlinear_law_without_its_remainder_and_a_misnamed_law_are_refused(in
                                  "misnamed_law": _law_module(body.format(name="other"))},
             {FRICTION_LAWS_GROUP: {"partial": "nonlinear_law:Law",
                                    "misnamed": "misnamed_law:Law"}})
-    with pytest.raises(PluginError, match=r"'partial'.*does not implement remainder, "
+    with pytest.raises(PluginError, match=r"'partial'.*does not implement with_viscous, remainder, "
                                           r"remainder_parameters.*required of a nonlinear law"):
         friction_law("partial")
     with pytest.raises(PluginError, match=r"'misnamed'.*is named 'other', not 'misnamed'"):

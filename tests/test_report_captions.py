@@ -64,7 +64,8 @@ def failing_job(job):
                         nonlinear_peak_after=after.peak, band_hz=band, holds=False,
                         reason=reason, simulations=(after, before), harmonic=harmonic,
                         claimed_peak_tuned=claim, nonlinear_peak_after_nominal=after.peak)
-    verdict = Verdict(False, True, False, (bad,), 0.3, (f"{regime}: {reason}",))
+    verdict = Verdict(verified=False, linear_holds=True, nonlinear_holds=False, regimes=(bad,),
+                      tolerance=0.3, reasons=(f"{regime}: {reason}",))
     return dataclasses.replace(job, verdict=verdict)
 
 

@@ -13,6 +13,7 @@ from servotune.axis import load_axis
 from servotune.cli import main
 from servotune.drive import Sampling
 from servotune.friction import LuGreParameters
+from servotune.friction.lugre import steady_state_friction
 from servotune.simulate import table3 as t3
 from servotune.simulate.setup import AxisSetup, axis_setup
 from servotune.simulate.verify import verify_design
@@ -47,7 +48,7 @@ def test_remark_a_lugre_locks_viscous_frees_and_who_absorbs(table):
 
 def test_remark_b_friction_work_is_steady_friction_times_distance(table):
     row = table.rows[2]
-    expect = -float(t3.steady_state_friction(P, 0.03)) * 0.03 * 2.5
+    expect = -float(steady_state_friction(P, 0.03)) * 0.03 * 2.5
     assert row["energy_friction_j"] == pytest.approx(expect, rel=0.01)
     assert row["energy_motor_j"] == pytest.approx(-row["energy_friction_j"], rel=0.01)
     assert table.remarks["B"]["holds"]
@@ -214,7 +215,7 @@ def test_bundled_axis_slides_without_stick_slip_at_30_mm_s():
         pad_v = r["v_" + pad.replace(".", "_")][late]
         assert pad_v.min() > 0.95 * v and pad_v.max() < 1.05 * v
     e = r.energies(0.5, 1.0)
-    expect = -float(t3.steady_state_friction(setup.lugre, v)) * v * 0.5
+    expect = -float(steady_state_friction(setup.lugre, v)) * v * 0.5
     assert e.friction == pytest.approx(expect, rel=5e-3)
     assert e.relative_residual < 1e-3
     constant = run(dataclasses.replace(setup.lugre, sigma1_decay_speed=None))

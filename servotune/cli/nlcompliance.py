@@ -120,8 +120,6 @@ def run(args) -> int:
         from ..simulate.setup import axis_setup
 
         axis = load_axis(args.axis)
-        if axis.friction is not None:
-            axis.friction.require_lugre("servotune nlcompliance")
         if args.continuous:
             axis = axis.with_continuous_drive()
         setup = axis_setup(axis)

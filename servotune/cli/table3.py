@@ -69,8 +69,6 @@ def load_setup(path, continuous: bool = True):
         raise FileNotFoundError(f"{path} has no axis.toml; give an axis folder such as "
                                 f"{default_axis()}")
     axis = load_axis(path)
-    if axis.friction is not None:
-        axis.friction.require_lugre("servotune table3")
     return axis_setup(axis.with_continuous_drive() if continuous else axis)
 
 

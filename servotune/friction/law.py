@@ -18,6 +18,12 @@ What a law gives (values are axis totals, shared equally by the guide-way pads):
   spring and damper), :meth:`~FrictionLaw.sliding_system` (linearised about steady sliding at a
   speed) and :meth:`~FrictionLaw.describing_function` (Ceq, Keq at a vibration; by default the
   first harmonic of :meth:`~FrictionLaw.periodic_force`);
+* **the design job** (``servotune tune``, the verdict, the thrust budget):
+  :meth:`~FrictionLaw.with_viscous` (the law with the design's viscous damping C in place of
+  its own viscous part), :meth:`~FrictionLaw.steady_force` and
+  :meth:`~FrictionLaw.steady_slope` (the sliding friction at constant speed and its slope; by
+  default from :meth:`~FrictionLaw.periodic_force` under a constant velocity, the law's own
+  steady state, and its central difference);
 * **the time simulation**: a linear block per pad (:meth:`~FrictionLaw.pad_block`) and, for a
   nonlinear law, a numba-compiled remainder ``(component, v, z, p) -> (r, dr_dv, dr_dz)``
   (:meth:`~FrictionLaw.remainder`) with its parameters, the states each remainder reads, the
@@ -60,8 +66,8 @@ __all__ = ["FrictionLaw", "friction_law", "friction_law_names", "friction_laws",
 LAWS_PACKAGE = "servotune.friction.laws"
 
 #: What every law implements: the axis file, the linear contact at rest, the time simulation's
-#: linear block, the force.
-REQUIRED_METHODS = ("from_table", "presliding", "pad_block", "friction_force")
+#: linear block, the force, and the law with another viscous part (the design's C).
+REQUIRED_METHODS = ("from_table", "presliding", "pad_block", "friction_force", "with_viscous")
 #: What a nonlinear law (``nonlinear = True``) implements besides: the time simulation's
 #: remainder and harmonic balance.
 REQUIRED_NONLINEAR_METHODS = ("remainder", "remainder_parameters", "remainder_states",
@@ -155,6 +161,88 @@ class FrictionLaw:
         viscous-only model unless the axis gives one."""
         return 0.0
 
+    def with_viscous(self, c: float) -> FrictionLaw:
+        """Return the law with the viscous part ``c`` in place of its own (axis total).
+
+        The design job tunes the guide ways' viscous damping C: every regime model, the
+        verdict's simulations and harmonic balance and the thrust budget take the law with its
+        viscous part replaced by the design's C (for LuGre: sigma2 = C).
+
+        Parameters
+        ----------
+        c : float
+            Viscous damping [N s/m], >= 0.
+
+        Returns
+        -------
+        FrictionLaw
+            A law of the same kind whose :attr:`viscous_part` is ``c``.
+        """
+        raise NotImplementedError
+
+    def steady_force(self, speed: float) -> float:
+        """Return the friction at constant sliding speed, axis total, viscous part included.
+
+        The default is the law's own steady state: :meth:`periodic_force` under a constant
+        velocity (the periodic orbit of a constant velocity is the steady state), averaged
+        over the samples. A law with a closed form overrides it.
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s], finite and non-zero.
+
+        Returns
+        -------
+        float
+            F_ss(v) [N], of the sign of v.
+
+        Raises
+        ------
+        ValueError
+            If ``speed`` is zero or not finite.
+        """
+        speed = _sliding_speed(speed)
+        velocity = np.full(64, speed)
+        # a travel of 1 m per period: far beyond any presliding range, so the states settle
+        force = self.periodic_force(velocity, 1.0 / abs(speed))
+        return float(np.mean(force))
+
+    def steady_slope(self, speed: float) -> float:
+        """Return the slope dF_ss/dv of the steady sliding friction [N s/m], viscous part
+        included: negative where the friction falls with speed (the Stribeck region).
+
+        The default is the central difference of :meth:`steady_force` over 1e-3 of the speed.
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s], finite and non-zero.
+
+        Returns
+        -------
+        float
+            The slope [N s/m].
+        """
+        speed = _sliding_speed(speed)
+        h = 1e-3 * abs(speed)
+        return float((self.steady_force(speed + h) - self.steady_force(speed - h)) / (2 * h))
+
+    def to_dict(self) -> dict:
+        """Return the law as JSON-ready data: its name and parameters (SI).
+
+        Returns
+        -------
+        dict
+            ``law`` and, when the law keeps its parameters in a ``params`` object with a
+            ``to_dict``, those parameters.
+        """
+        out = {"law": self.name}
+        params = getattr(self, "params", None)
+        if hasattr(params, "to_dict"):
+            out.update(params.to_dict())
+        return out
+
     def presliding(self) -> tuple[float, float]:
         """Return the contact linearised at rest (all of it sticking), axis totals.
 
@@ -167,6 +255,12 @@ class FrictionLaw:
 
     def sliding_system(self, speed: float) -> control.StateSpace:
         """Return the contact linearised about steady sliding at a speed, axis total.
+
+        The default is the linearisation of the law's own simulation model: its linear block
+        (:meth:`pad_block` at ``speed``, one pad carrying the whole law) with each remainder
+        (:meth:`remainder`) replaced by its tangent at the steady state, which is found by
+        integrating the block at the constant speed (``scipy.integrate.solve_ivp``, BDF) and
+        polished by Newton steps. A law with a closed form overrides it.
 
         Parameters
         ----------
@@ -181,9 +275,65 @@ class FrictionLaw:
         Raises
         ------
         ValueError
-            If the law has no sliding linearisation or ``speed`` is 0.
+            If ``speed`` is 0 or not finite, or the law's model has no steady state at it.
         """
-        raise ValueError(f"the {self.name!r} friction law has no sliding linearisation")
+        speed = _sliding_speed(speed)
+        pad = "x"
+        block = self.pad_block(pad, 1, speed)
+        inputs, outputs = list(block.input_labels), list(block.output_labels)
+        a, b = np.asarray(block.A, float), np.asarray(block.B, float)
+        c, d = np.asarray(block.C, float), np.asarray(block.D, float)
+        iv, jf = inputs.index(signal_name(pad, "v_")), outputs.index(signal_name(pad, "F_"))
+        remainders = [inputs.index(r) for r in self.remainder_signals(pad)]
+        one = inputs.index("one") if "one" in inputs else None
+        nr, nx = len(remainders), a.shape[0]
+        states = list(block.state_labels)
+        reads = [states.index(z) for z in self.remainder_states(pad)[:nr]] if nr else []
+        select = np.zeros((nr, nx))
+        select[np.arange(nr), reads] = 1.0
+        kernel = self.remainder() if nr else None
+        params = np.asarray(self.remainder_parameters(speed), float) if nr else None
+        constant = b[:, iv] * speed + (b[:, one] if one is not None else 0.0)
+
+        def rem(x):
+            out = np.array([kernel(k, speed, float(x[reads[k]]), params) for k in range(nr)],
+                           dtype=float).reshape(nr, 3)
+            return out[:, 0], out[:, 1], out[:, 2]
+
+        def rate(x):
+            return a @ x + constant + (b[:, remainders] @ rem(x)[0] if nr else 0.0)
+
+        def jacobian(x):
+            return a + (b[:, remainders] @ (rem(x)[2][:, None] * select) if nr else 0.0)
+
+        x = np.zeros(nx)
+        if nx:
+            from scipy.integrate import solve_ivp
+
+            _, scales = self.error_scales() if nr else (None, (1.0,))
+            horizon = 200.0 * max(scales) / abs(speed)
+            run = solve_ivp(lambda _t, y: rate(y), (0.0, horizon), x, method="BDF",
+                            jac=lambda _t, y: jacobian(y), rtol=1e-10,
+                            atol=1e-12 * max(scales))
+            x = run.y[:, -1]
+            for _ in range(20):
+                step = np.linalg.solve(jacobian(x), rate(x))
+                x = x - step
+                if np.all(np.abs(step) <= 1e-14 * max(scales)):
+                    break
+            if not np.all(np.isfinite(x)) or np.max(np.abs(rate(x))) > 1e-9 * abs(speed):
+                raise ValueError(f"the {self.name!r} friction law's model has no steady state "
+                                 f"at {speed!r} m/s")
+        if nr:
+            _, dr_dv, dr_dz = rem(x)
+        else:
+            dr_dv = dr_dz = np.zeros(0)
+        br, dr = b[:, remainders], d[jf, remainders]
+        return control.ss(jacobian(x) if nx else np.zeros((0, 0)),
+                          (b[:, iv] + br @ dr_dv).reshape(nx, 1),
+                          (c[jf] + dr @ (dr_dz[:, None] * select)).reshape(1, nx),
+                          [[float(d[jf, iv] + dr @ dr_dv)]], inputs=["velocity"],
+                          outputs=["force"], name=f"{self.name}_sliding")
 
     def describing_function(self, amplitude: float, omega: float,
                             n_samples: int = 512) -> tuple[float, float]:
@@ -393,6 +543,14 @@ class FrictionLaw:
             The force [N] at the same N instants, with the law's states on their periodic orbit.
         """
         raise NotImplementedError(f"the {self.name!r} friction law has no periodic force")
+
+
+def _sliding_speed(speed) -> float:
+    speed = float(speed)
+    if not (math.isfinite(speed) and speed != 0.0):
+        raise ValueError(f"the steady sliding friction needs a finite, non-zero speed [m/s], got "
+                         f"{speed!r}")
+    return speed
 
 
 def _plugins() -> dict:

@@ -77,6 +77,15 @@ class HarmonicSettings:
         the same test).
     max_iterations : int
         Newton iterations per fixed-frequency solve (:meth:`PadBalance.solve`), at least 1.
+    secant_updates : int
+        For a law without an exact derivative of its periodic force (no
+        ``periodic_force_jacobian``; LuGre has one): how many times the finite-difference
+        Jacobian of the friction harmonics (2H + 1 law evaluations per pad) is carried on by
+        Broyden's rank-one update (one evaluation per pad) before it is taken afresh; it is
+        taken afresh too when the frequency moves by more than 2 % or the pad response by more
+        than 20 % since. The solutions are those of the residual either way (Newton's test is
+        on the residual); 0 takes it afresh every time (Broyden 1965; Kelley, Iterative Methods
+        for Linear and Nonlinear Equations, SIAM 1995, ch 7).
 
     Raises
     ------
@@ -89,6 +98,7 @@ class HarmonicSettings:
     samples: int | None = None
     tolerance: float = 1e-8
     max_iterations: int = 40
+    secant_updates: int = 8
 
     def __post_init__(self) -> None:
         h = int(self.harmonics)
@@ -107,6 +117,11 @@ class HarmonicSettings:
             raise ValueError("HarmonicSettings.max_iterations must be a whole number >= 1, got "
                              f"{self.max_iterations!r}")
         object.__setattr__(self, "max_iterations", int(self.max_iterations))
+        if (isinstance(self.secant_updates, bool) or int(self.secant_updates) != self.secant_updates
+                or self.secant_updates < 0):
+            raise ValueError("HarmonicSettings.secant_updates must be a whole number >= 0, got "
+                             f"{self.secant_updates!r}")
+        object.__setattr__(self, "secant_updates", int(self.secant_updates))
 
 
 class PadBalance:
@@ -148,6 +163,7 @@ class PadBalance:
         self.share = 1.0 / self.n_pads
         self._k = np.arange(1, self.harmonics + 1)
         self._cache = (None, None)
+        self._secant = None   # (y, omega, friction harmonics, their Jacobian, updates since FD)
         self._pad_law, self._pad_share = law, self.share
         if not callable(getattr(law, "periodic_force", None)):
             params = law if isinstance(law, LuGreParameters) else getattr(law, "params", None)
@@ -280,6 +296,31 @@ class PadBalance:
         x = self.complex_of(y)
         return np.asarray(y, dtype=float) - self.real_of(self.response(x, omega)[:self.n_pads])
 
+    def _secant_jacobian(self, y, omega: float, fr) -> np.ndarray:
+        """The friction Jacobian by finite differences, carried on by Broyden updates
+        (``settings.secant_updates``) while the point stays near the last one."""
+        n, h2 = self.n_pads, 2 * self.harmonics
+        last = self._secant
+        if last is not None and last[4] < self.settings.secant_updates:
+            y0, w0, fr0, jac, age = last
+            dy = (y - y0).reshape(n, h2)
+            near = (abs(omega / w0 - 1.0) <= 0.02
+                    and np.linalg.norm(y - y0) <= 0.2 * max(np.linalg.norm(y0), 1e-300))
+            if near:
+                df = (np.concatenate([fr.real, fr.imag], axis=1)
+                      - np.concatenate([fr0.real, fr0.imag], axis=1))
+                jac = jac.copy()
+                for p in range(n):
+                    step = dy[p]
+                    norm2 = float(step @ step)
+                    if norm2 > 0.0:
+                        jac[p] += np.outer(df[p] - jac[p] @ step, step) / norm2
+                self._secant = (np.array(y), omega, fr, jac, age + 1)
+                return jac
+        jac = self._friction_jacobian(y, omega, fr)
+        self._secant = (np.array(y), omega, fr, jac, 0)
+        return jac
+
     def _friction_jacobian(self, y, omega: float, base) -> np.ndarray:
         """d(friction harmonics, real form)/dy, block-diagonal: shape (n, 2H, 2H)."""
         n, h = self.n_pads, self.harmonics
@@ -338,7 +379,7 @@ class PadBalance:
         analytic = self._analytic_jacobian(x, omega)
         if analytic is None:
             fr = self.friction_harmonics(x, omega)
-            dfr = self._friction_jacobian(y, omega, fr)
+            dfr = self._secant_jacobian(y, omega, fr)
         else:
             fr, dfr = analytic
         r = y - self.real_of(self.response(x, omega, friction=fr)[:self.n_pads])

@@ -31,9 +31,9 @@ import numpy as np
 
 from ..blas import one_thread
 from ..closed_loop import axis_compliance
-from ..friction.lugre import sliding_linearisation
 from ..peaks import BandPeak, band_peak, parabola_peak
 from ..plant import Contact
+from ..regimes import as_law
 from ..units import HZ_PER_RAD_S
 from .aft import samples_from_harmonics
 from .balance import HarmonicSettings, PadBalance
@@ -317,8 +317,9 @@ def _curve(balance: PadBalance, band, continuation, y0=None) -> ComplianceCurve:
 def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
     """Return a start of the balance at rest: the pads on the linear presliding contact.
 
-    The friction of each pad is taken as the linear impedance
-    ``z = (sigma0 + j w (sigma1 + sigma2)) / n`` (the axis totals shared by the n pads), so that
+    The friction of each pad is taken as the linear impedance of the law's presliding contact
+    ``z = (k + j w d) / n`` (the axis totals shared by the n pads; LuGre: k = sigma0,
+    d = sigma1 + sigma2), so that
     (1) with the fundamental only becomes ``(I + G_pp(j w) z) X_1 = G_pF(j w) F_a``.
 
     Parameters
@@ -327,8 +328,8 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
         The balance equations.
     omega : float
         Angular frequency [rad/s].
-    params : LuGreParameters
-        Axis-total friction (sigma0 [N/m], sigma1 and sigma2 [N s/m]).
+    params : FrictionLaw or LuGreParameters
+        Axis-total friction law (its presliding spring [N/m] and damper [N s/m]).
 
     Returns
     -------
@@ -337,11 +338,18 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
     """
     n = balance.n_pads
     g = balance.receptance(np.array([omega]))[:, :, 0]
-    z = (params.sigma0 + 1j * omega * (params.sigma1 + params.sigma2)) / n
+    k, d = as_law(params).presliding()
+    z = (k + 1j * omega * d) / n
     x = np.linalg.solve(np.eye(n) + g[:n, :n] * z, g[:n, n] * balance.force_amplitude)
     h = np.zeros((n, balance.harmonics), dtype=complex)
     h[:, 0] = x
     return balance.real_of(h)
+
+
+def _presliding_contact(law) -> Contact:
+    """The law's presliding contact (a law without a spring: its damper alone)."""
+    k, d = law.presliding()
+    return Contact.stiction(k, d, 0.0) if k > 0 else Contact.viscous(d)
 
 
 def require_stable_regime(setup, speed: float = 0.0) -> None:
@@ -355,8 +363,8 @@ def require_stable_regime(setup, speed: float = 0.0) -> None:
     setup : servotune.simulate.setup.AxisSetup
         Structure, drive, pads and friction of the axis.
     speed : float
-        Feed speed [m/s]: > 0 checks the LuGre linearisation about sliding at that speed,
-        otherwise the presliding contact (at rest).
+        Feed speed [m/s]: > 0 checks the law's linearisation about sliding at that speed,
+        otherwise its presliding contact (at rest).
 
     Raises
     ------
@@ -366,13 +374,14 @@ def require_stable_regime(setup, speed: float = 0.0) -> None:
     """
     from ..closed_loop import closed_loop
 
-    p = setup.lugre
+    law = setup.law
     if speed > 0.0:
-        contact = Contact.sliding(sliding_linearisation(p, speed), speed)
-        what = f"closed loop feeding at {speed * 1e3:g} mm/s (LuGre linearised about sliding)"
+        contact = Contact.sliding(law.sliding_system(speed), speed)
+        what = (f"closed loop feeding at {speed * 1e3:g} mm/s ({law.name} linearised about "
+                f"sliding)")
     else:
-        contact = Contact.stiction(p.sigma0, p.sigma1, p.sigma2)
-        what = "closed loop at rest (LuGre presliding contact)"
+        contact = _presliding_contact(law)
+        what = f"closed loop at rest ({law.name} presliding contact)"
     # a digital drive is checked as the sampled-data loop it is (the balance models it so)
     closed_loop(setup.structure, setup.drive, contact, setup.pads).require_stable(what)
 
@@ -406,9 +415,9 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
         Step control of the continuation.
     law : object, optional
         The pad friction law (axis totals): any law with ``periodic_force`` (see
-        :func:`~servotune.harmonic.aft.periodic_friction_force`); default the LuGre parameters
-        of ``setup`` themselves, evaluated by
-        :func:`~servotune.friction.periodic.lugre_periodic_force` with its exact Jacobian.
+        :func:`~servotune.harmonic.aft.periodic_friction_force`); default the friction law of
+        ``setup`` (LuGre by :func:`~servotune.friction.periodic.lugre_periodic_force` with
+        its exact Jacobian).
     references : bool
         Also the linear references (presliding, viscous-only and, when ``speed > 0``, sliding
         at ``speed``), by :func:`servotune.closed_loop.axis_compliance` on 901 frequencies.
@@ -451,7 +460,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     if not (math.isfinite(speed) and speed >= 0.0):
         raise ValueError(f"the feed speed must be finite and >= 0 m/s, got {speed!r}")
     settings = settings or HarmonicSettings()
-    law = setup.lugre if law is None else law
+    law = setup.law if law is None else law
     rec = pad_receptance(setup.structure, setup.drive, setup.pads)
     curves, df = [], []
     for j, fpp in enumerate(forces):
@@ -460,18 +469,17 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
                 continue
             s = dataclasses.replace(settings, harmonics=h, samples=None) if h == 1 else settings
             bal = PadBalance(rec, law, 0.5 * fpp, speed, s)
-            y0 = presliding_guess(bal, band[0], setup.lugre) if speed == 0.0 else None
+            y0 = presliding_guess(bal, band[0], setup.law) if speed == 0.0 else None
             out.append(_curve(bal, band, continuation, y0))
         if progress is not None:
             progress(j + 1)
     refs = {}
     if references:
         omega = np.linspace(band[0], band[1], 901)
-        p = setup.lugre
-        models = {"presliding": Contact.stiction(p.sigma0, p.sigma1, p.sigma2),
+        models = {"presliding": _presliding_contact(setup.law),
                   "viscous": Contact.viscous(setup.viscous)}
         if speed > 0.0:
-            models["sliding"] = Contact.sliding(sliding_linearisation(p, speed), speed)
+            models["sliding"] = Contact.sliding(setup.law.sliding_system(speed), speed)
         for name, contact in models.items():
             refs[name] = (omega, np.abs(axis_compliance(setup.structure, omega, setup.drive,
                                                         contact, setup.pads)[0]))

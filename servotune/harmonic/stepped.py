@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..simulate import LuGreFriction, NonlinearAxis, Scenario, simulate
+from ..simulate import NonlinearAxis, Scenario, simulate
 
 __all__ = ["SteppedSine", "stepped_sine"]
 
@@ -101,8 +101,7 @@ def stepped_sine(setup, force_pp: float, omega, speed: float = 0.0, tolerance: f
         Relative change of the fundamental between the last two windows that counts as steady
         (``|last - before| <= tolerance last``).
     law : PadFriction, optional
-        The friction law of every pad (default
-        :class:`~servotune.simulate.LuGreFriction` with the LuGre parameters of ``setup``).
+        The friction law of every pad (default the law of ``setup``).
     window_cycles : int
         Cycles of the force per window.
     first : float
@@ -127,7 +126,7 @@ def stepped_sine(setup, force_pp: float, omega, speed: float = 0.0, tolerance: f
     servotune.harmonic.compliance.nonlinear_compliance : the harmonic balance it checks.
     """
     t_start = time.perf_counter()
-    law = LuGreFriction(setup.lugre) if law is None else law
+    law = setup.law if law is None else law
     axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, law)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     comp, durations = np.empty(omega.size), np.empty(omega.size)

@@ -2,8 +2,9 @@
 
 :func:`axis_setup` takes a loaded :class:`servotune.axis.Axis` and returns the structure, the
 :class:`~servotune.drive.Drive` (with full velocity feed-forward unless the axis sets one: the
-moving trials impose the speed through the reference), the pad DOFs, the axis-total LuGre
-parameters and the viscous-only damping of the "vd" model.
+moving trials impose the speed through the reference), the pad DOFs, the axis' friction law
+(axis totals; its LuGre parameters when it is LuGre) and the viscous-only damping of the "vd"
+model.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from ..drive import Drive
+from ..friction.law import FrictionLaw
 from ..friction.lugre import LuGreParameters
 from ..structure.model import ModalModel
 
@@ -32,22 +34,68 @@ class AxisSetup:
         The drive.
     pads : tuple of str
         The guide-way pad DOFs.
-    lugre : LuGreParameters
-        LuGre parameters of the friction (axis totals).
+    lugre : LuGreParameters or None
+        LuGre parameters of the friction (axis totals); None for another law.
     viscous : float
         Viscous-only guide-way damping [N s/m] of the "vd" model.
+    law : FrictionLaw, optional
+        The friction law (axis totals); default the LuGre law of ``lugre``.
+
+    Raises
+    ------
+    ValueError
+        Neither ``lugre`` nor ``law``, or both and different.
     """
 
     name: str
     structure: ModalModel
     drive: Drive
     pads: tuple[str, ...]
-    lugre: LuGreParameters
+    lugre: LuGreParameters | None
     viscous: float
+    law: FrictionLaw | None = None
+
+    def __post_init__(self) -> None:
+        law = self.law
+        if law is None:
+            if not isinstance(self.lugre, LuGreParameters):
+                raise ValueError("AxisSetup needs a friction law (law=...) or LuGre parameters")
+            from ..friction.laws.lugre import LuGreFriction
+
+            law = LuGreFriction(self.lugre)
+        elif not isinstance(law, FrictionLaw):
+            raise ValueError(f"AxisSetup.law must be a FrictionLaw, got {law!r}")
+        lugre = getattr(law, "lugre_parameters", None)
+        if self.lugre is not None and lugre != self.lugre:
+            raise ValueError("AxisSetup: give the friction law or the LuGre parameters, not both")
+        object.__setattr__(self, "law", law)
+        object.__setattr__(self, "lugre", lugre)
+
+    def require_lugre(self, what: str) -> LuGreParameters:
+        """Return the LuGre parameters, or refuse another law naming the job.
+
+        Parameters
+        ----------
+        what : str
+            The job that needs them (e.g. ``"the paper's Table 3"``).
+
+        Returns
+        -------
+        LuGreParameters
+
+        Raises
+        ------
+        ValueError
+            The law is not LuGre.
+        """
+        if self.lugre is None:
+            raise ValueError(f"{what} needs LuGre friction; the axis' friction law is "
+                             f"{self.law.name!r}")
+        return self.lugre
 
 
 def axis_setup(axis) -> AxisSetup:
-    """Return the structure, drive, pads, LuGre parameters and viscous-only damping of an axis.
+    """Return the structure, drive, pads, friction law and viscous-only damping of an axis.
 
     The "vd" damping is ``[friction] viscous`` [N s/m] (default: the LuGre sigma2, the viscous
     part of the identified friction). The drive gets full velocity feed-forward unless
@@ -73,4 +121,5 @@ def axis_setup(axis) -> AxisSetup:
     if "velocity" not in axis.tables.get("drive", {}).get("feedforward", {}):
         drive = dataclasses.replace(drive, velocity_feedforward=1.0)
     return AxisSetup(name=axis.name, structure=axis.structure, drive=drive, pads=pads,
-                     lugre=axis.friction.lugre, viscous=axis.friction.viscous)
+                     lugre=axis.friction.lugre, viscous=axis.friction.viscous,
+                     law=axis.friction.law)

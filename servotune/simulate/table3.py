@@ -5,7 +5,10 @@ Bianchi et al. (2014), sec 5.3, simulate the full axis with a force at the work 
 ("lg") standing still and moving at 30 mm/s, and with viscous damping only ("vd") standing
 still. Energies are taken over a fixed 18 s window (here t = 2 .. 20 s, after the initial
 transient). Reading of "vd": the pads carry the viscous damping ``[friction] viscous`` of the
-axis (the paper's sigma2 = 5578 N s/m) and nothing else.
+axis (the paper's sigma2 = 5578 N s/m) and nothing else. Reading of "lg" for an axis with
+another friction law (``[friction.gms]``, a plug-in's): the pads carry that law, and remark B
+takes its own steady sliding friction
+(:meth:`~servotune.friction.law.FrictionLaw.steady_force`).
 
 :func:`table3` submits one job per trial to any executor with ``submit(fn, *args)`` returning
 futures with ``result()``: a ``concurrent.futures`` executor or a ``dask.distributed.Client``.
@@ -27,10 +30,9 @@ import numpy as np
 
 from ..closed_loop import axis_compliance
 from ..frequency import peak
-from ..friction.lugre import steady_state_friction
 from ..plant import Contact
 from ..units import HZ_PER_RAD_S
-from .contact import LuGreFriction, ViscousFriction
+from .contact import ViscousFriction
 from .scenario import sine_sweep
 from .setup import AxisSetup
 from .simulator import DEFAULT_STEP, DEFAULT_TOLERANCE, NonlinearAxis, simulate
@@ -160,8 +162,7 @@ def run_trial(setup: AxisSetup, trial: Trial, settings: SweepSettings) -> dict:
     SimulationError
         If the integration stops before the end.
     """
-    friction = (LuGreFriction(setup.lugre) if trial.model == "lg"
-                else ViscousFriction(setup.viscous))
+    friction = setup.law if trial.model == "lg" else ViscousFriction(setup.viscous)
     axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, friction)
     scenario = sine_sweep(trial.force_pp, settings.f_start_hz, settings.f_end_hz,
                           settings.duration, speed=trial.speed)
@@ -201,10 +202,11 @@ def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
         ``{"locked" | "presliding" | "viscous": {"resonance_hz", "compliance_m_per_n"}}``.
     """
     omega = 2 * math.pi * np.linspace(settings.f_start_hz, settings.f_end_hz, 2000)
-    p = setup.lugre
+    k, d = setup.law.presliding()
     out = {}
     for key, contact in (("locked", Contact.locked()),
-                         ("presliding", Contact.stiction(p.sigma0, p.sigma1, p.sigma2)),
+                         ("presliding", Contact.stiction(k, d, 0.0) if k > 0
+                          else Contact.viscous(d)),
                          ("viscous", Contact.viscous(setup.viscous))):
         h = axis_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
         mag, w = peak(omega, h)
@@ -275,7 +277,7 @@ def check_remarks(rows: list[dict], references: dict, setup: AxisSetup,
         checks, parts = [], []
         for r in moving:
             v = r["speed_m_per_s"]
-            expect = -float(steady_state_friction(setup.lugre, v)) * abs(v) * t
+            expect = -float(setup.law.steady_force(v)) * abs(v) * t
             ok = (abs(r["energy_friction_j"] / expect - 1) < 0.05
                   and abs(r["energy_motor_j"] / -r["energy_friction_j"] - 1) < 0.05)
             checks.append(ok)

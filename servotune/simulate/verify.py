@@ -1,22 +1,24 @@
 """Nonlinear verification of a tuned design against the linear predictions it was tuned on.
 
 A design (guide-way damping C, Kv, velocity Kp and Ti; :class:`servotune.tuning.Design`) is
-tuned on linear models. :func:`verify_design` simulates it with LuGre friction at the pads under
+tuned on linear models. :func:`verify_design` simulates it with the axis' friction law (LuGre in
+the paper) at the pads under
 sine sweeps standing still, and compares each sweep's resonance and peak oscillation per force
 with four linear predictions of the closed loop (:func:`servotune.closed_loop.axis_compliance`):
 
 * ``locked``: pads held rigidly;
-* ``presliding``: pads on the LuGre presliding contact (spring sigma0, damper sigma1 + C), the
-  small-amplitude limit (the paper's remark A);
+* ``presliding``: pads on the law's presliding contact (LuGre: spring sigma0, damper sigma1 +
+  C), the small-amplitude limit (the paper's remark A);
 * ``viscous``: pads as the viscous damper C the design assumes;
-* ``describing``: pads as the LuGre describing function (Ceq, Keq; paper Eq 8-10) at the pad
-  vibration amplitude the simulation shows at its resonance.
+* ``describing``: pads as the law's describing function (Ceq, Keq; for LuGre paper Eq 8-10) at
+  the pad vibration amplitude the simulation shows at its resonance.
 
 Reading of C in the nonlinear model: the design's C is the viscous part of the guide-way
-friction, so the LuGre law keeps Fc, Fs, vs, delta, sigma0 and sigma1 of the axis and takes
-sigma2 = C. Agreement: resonance within ``freq_tol`` (relative) and peak within ``peak_tol``;
-the swept envelope is not a steady-state response (the sweep passes a resonance in a finite
-time), so the tolerances are loose by design.
+friction (:meth:`~servotune.friction.law.FrictionLaw.with_viscous`): the LuGre law keeps Fc, Fs,
+vs, delta, sigma0 and sigma1 of the axis and takes sigma2 = C. Agreement: resonance within
+``freq_tol`` (relative) and peak within ``peak_tol``; the swept envelope is not a steady-state
+response (the sweep passes a resonance in a finite time), so the tolerances are loose by
+design.
 """
 
 from __future__ import annotations
@@ -30,10 +32,8 @@ import numpy as np
 from ..closed_loop import axis_compliance
 from ..drive import PIController
 from ..frequency import peak
-from ..friction.equivalent import describing_function
 from ..plant import Contact
 from ..units import HZ_PER_RAD_S
-from .contact import LuGreFriction
 from .scenario import sine_sweep
 from .setup import AxisSetup
 from .simulator import NonlinearAxis, simulate
@@ -52,7 +52,8 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
     setup : AxisSetup
         The axis set-up (:func:`servotune.simulate.setup.axis_setup`).
     c : float
-        Guide-way damping C [N s/m]: the LuGre sigma2 and the viscous-only damping.
+        Guide-way damping C [N s/m]: the law's viscous part (LuGre sigma2) and the
+        viscous-only damping.
     kv : float, optional
         Position gain Kv [1/s].
     kp : float, optional
@@ -85,8 +86,8 @@ def design_setup(setup: AxisSetup, c: float, kv: float | None = None, kp: float 
                                    drive.velocity_loop.ti if ti is None else float(ti)),
         notches=drive.notches + (() if notch is None else (notch,)),
         lowpass=drive.lowpass if lowpass is None else lowpass)
-    lugre = dataclasses.replace(setup.lugre, sigma2=float(c))
-    return dataclasses.replace(setup, drive=drive, lugre=lugre, viscous=float(c))
+    law = setup.law.with_viscous(float(c))
+    return dataclasses.replace(setup, drive=drive, lugre=None, law=law, viscous=float(c))
 
 
 def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 10.0,
@@ -135,11 +136,12 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
         mag, w = peak(omega, h)
         return {"resonance_hz": w * HZ_PER_RAD_S, "peak_m_per_n": mag}
 
-    p = setup.lugre
+    k, d = setup.law.presliding()
     linear = {"locked": predict(Contact.locked()),
-              "presliding": predict(Contact.stiction(p.sigma0, p.sigma1, p.sigma2)),
+              "presliding": predict(Contact.stiction(k, d, 0.0) if k > 0
+                                    else Contact.viscous(d)),
               "viscous": predict(Contact.viscous(setup.viscous))}
-    axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, LuGreFriction(setup.lugre))
+    axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, setup.law)
     jobs = [(axis, float(f), f_start_hz, f_end_hz, duration) for f in forces]
     if executor is None:
         sims = [_sweep(*job) for job in jobs]
@@ -147,8 +149,8 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
         sims = [fut.result() for fut in [executor.submit(_sweep, *job) for job in jobs]]
     sweeps = []
     for f, sim in zip(forces, sims, strict=True):
-        ceq, keq = describing_function(setup.lugre, sim["pad_amplitude_m"],
-                                       2 * math.pi * sim["resonance_hz"])
+        ceq, keq = setup.law.describing_function(sim["pad_amplitude_m"],
+                                                 2 * math.pi * sim["resonance_hz"])
         row = dict(sim)
         row["force_pp_n"] = float(f)
         # F = Keq x + Ceq v as a contact from velocity (Keq of the LuGre element may be
@@ -162,6 +164,7 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
                 and abs(sim["peak_m_per_n"] / pred["peak_m_per_n"] - 1) <= peak_tol)
         sweeps.append(row)
     return {"linear": linear, "sweeps": sweeps, "freq_tol": freq_tol, "peak_tol": peak_tol,
+            "friction_law": setup.law.name,
             "design": {"c": setup.viscous, "kv": setup.drive.kv,
                        "kp": setup.drive.velocity_loop.kp, "ti": setup.drive.velocity_loop.ti}}
 

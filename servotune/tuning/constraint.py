@@ -22,7 +22,11 @@ A requirement gives:
 * **how the report shows it**: the text of each check it returns.
 
 Its settings are fields of :class:`servotune.requirements.Requirements` (the ``[requirements]``
-of an axis) or, for a requirement added as a module, class attributes of its own.
+of an axis) for servotune's own; a requirement of another package declares its own
+(:attr:`Requirement.settings`, each a :class:`servotune.requirements.Setting` with name, unit,
+default, range and help): the axis file's ``[requirements]`` accepts and validates them
+(:func:`declared_settings`), ``servotune init`` writes them into its template and the report
+lists their values; the requirement reads them with :meth:`Requirement.setting`.
 """
 
 from __future__ import annotations
@@ -38,9 +42,11 @@ from ..plugins import (
     load_plugin,
     missing_methods,
 )
+from ..requirements import Requirements, Setting
 
 __all__ = ["Requirement", "RequirementCheck", "LoopQuantities", "requirements",
-           "requirement_problems", "REQUIREMENTS_PACKAGE", "CHECK_TOLERANCE"]
+           "requirement_problems", "declared_settings", "REQUIREMENTS_PACKAGE",
+           "CHECK_TOLERANCE"]
 
 #: servotune's package of requirements, whose modules are imported only in an uninstalled
 #: source tree (:func:`servotune.plugins.discover`).
@@ -138,6 +144,37 @@ class Requirement:
     gate_size: int = 0
     #: Whether the rows apply only to the moving models (sliding or viscous pads).
     moving_only: bool = False
+    #: The settings it reads from ``[requirements]`` (a requirement of another package; those
+    #: of servotune are fields of :class:`servotune.requirements.Requirements`).
+    settings: tuple[Setting, ...] = ()
+
+    @classmethod
+    def setting(cls, problem, name: str) -> float | None:
+        """Return the value of one of :attr:`settings` for a problem: the axis file's, else
+        the declared default.
+
+        Parameters
+        ----------
+        problem : servotune.tuning.TuningProblem
+            The problem (its requirements).
+        name : str
+            The setting's name.
+
+        Returns
+        -------
+        float or None
+            None when neither the axis nor the declaration gives one.
+
+        Raises
+        ------
+        KeyError
+            The requirement declares no such setting.
+        """
+        for declared in cls.settings:
+            if declared.name == name:
+                return problem.requirements.value(declared)
+        raise KeyError(f"the requirement {cls.name!r} declares no setting {name!r} (it declares "
+                       f"{[d.name for d in cls.settings]})")
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -346,6 +383,17 @@ def requirement_problems(plugin_class) -> list[str]:
     if len(lacks("model_checks", "design_checks")) == 2:
         problems.append(f"{cls.__qualname__} checks nothing: it implements neither "
                         "model_checks nor design_checks")
+    settings = getattr(cls, "settings", ())
+    if not all(isinstance(x, Setting) for x in settings):
+        problems.append(f"{cls.__qualname__}.settings must be a tuple of "
+                        "servotune.requirements.Setting")
+    else:
+        names = [x.name for x in settings]
+        builtin = set(Requirements.__dataclass_fields__)
+        clash = sorted({n for n in names if names.count(n) > 1} | (set(names) & builtin))
+        if clash:
+            problems.append(f"{cls.__qualname__} declares the settings {clash} twice or under "
+                            "the name of a servotune requirement field; rename them")
     return problems
 
 
@@ -379,6 +427,30 @@ def _load_all() -> None:
         _ORIGIN[cls.name] = plugin
     if errors:
         raise PluginError("\n".join(errors))
+
+
+def declared_settings() -> dict[str, tuple[Setting, str]]:
+    """Return every setting the registered requirements declare, by name.
+
+    Returns
+    -------
+    dict of str to (Setting, str)
+        Name -> (declaration, the declaring requirement's name).
+
+    Raises
+    ------
+    servotune.plugins.PluginError
+        As :func:`requirements`, or two requirements declaring a setting of one name (both
+        named).
+    """
+    out: dict[str, tuple[Setting, str]] = {}
+    for cls in requirements():
+        for setting in getattr(cls, "settings", ()):
+            if setting.name in out and out[setting.name][1] != cls.name:
+                raise PluginError(f"the requirements {out[setting.name][1]!r} and {cls.name!r} "
+                                  f"both declare the setting {setting.name!r}; rename one")
+            out[setting.name] = (setting, cls.name)
+    return out
 
 
 def requirements(problem=None) -> tuple[type, ...]:

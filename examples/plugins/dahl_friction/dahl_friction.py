@@ -8,21 +8,24 @@ presliding distance of the order of Fc/sigma0::
 
 With the state z = F/sigma0 [m] and ``u = sigma0 z sgn(v) / Fc`` this is, in time::
 
-    dz/dt = v h(u),     h(u) = |1 - u|^alpha sgn(1 - u),     F = sigma0 z
+    dz/dt = v h(u),     h(u) = |1 - u|^alpha sgn(1 - u),     F = sigma0 z + sigma2 v
 
 (the power of a signed base written so that a force above Fc decays back to it; Olsson et al.
-1998, Eq 6, for alpha = 1: ``dF/dt = sigma0 (v - |v| F/Fc)``). Steady sliding gives F = Fc sgn(v)
-(no Stribeck effect, no viscous part); from rest (the virgin curve, alpha = 1) a displacement x
-in one direction gives ``F = Fc (1 - exp(-sigma0 |x| / Fc)) sgn(x)``. alpha = 1 is the usual
+1998, Eq 6, for alpha = 1: ``dF/dt = sigma0 (v - |v| F/Fc)``), with a viscous part sigma2 v
+beside it (0 by default; the design job of servotune tunes it as the guide ways' damping C).
+Steady sliding gives F = Fc sgn(v) + sigma2 v (no Stribeck effect); from rest (the virgin
+curve, alpha = 1) a displacement x in one direction gives
+``F = Fc (1 - exp(-sigma0 |x| / Fc)) sgn(x)``. alpha = 1 is the usual
 choice; alpha > 1 bends the curve more sharply (Olsson et al. 1998). alpha < 1 is refused here:
 the rate's derivative in z is then infinite at steady sliding, and the implicit time integration
 of servotune needs it.
 
 How servotune takes the law (:class:`servotune.friction.law.FrictionLaw`): a linear block per
-pad, ``dz/dt = v - c0 - c_v v - c_z z - r`` and ``F = sigma0 z``, and the nonlinear remainder
-``r = w(v, z) - (c0 + c_v v + c_z z)`` with ``w = v (1 - h(u))`` (:func:`dahl_remainder`, a
-numba function the simulation compiles its kernel around). About rest c0 = c_v = c_z = 0 (the
-presliding spring sigma0); about steady sliding at v0 the tangent of w at z0 = sgn(v0) Fc/sigma0:
+pad, ``dz/dt = v - c0 - c_v v - c_z z - r`` and ``F = sigma0 z + sigma2 v``, and the
+nonlinear remainder ``r = w(v, z) - (c0 + c_v v + c_z z)`` with ``w = v (1 - h(u))``
+(:func:`dahl_remainder`, a numba function the simulation compiles its kernel around). About
+rest c0 = c_v = c_z = 0 (the presliding spring sigma0); about steady sliding at v0 the tangent
+of w at z0 = sgn(v0) Fc/sigma0:
 c_v = 1, c_z = alpha sigma0 |v0| |1 - u0|^(alpha - 1) / Fc (sigma0 |v0| / Fc for alpha = 1, 0
 above), c0 = v0 - c_v v0 - c_z z0. The periodic force of harmonic balance is exact: on a path
 that is monotone between samples the law has a closed form (:func:`dahl_step`).
@@ -34,6 +37,7 @@ an axis file::
     sigma0 = 5.9e9     # N/m, axis total
     fc = 2198.0        # N, axis total
     alpha = 1.0
+    sigma2 = 0.0       # N s/m, axis total (optional)
 
 References
 ----------
@@ -46,6 +50,7 @@ Eq 5-6.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -162,6 +167,8 @@ class DahlFriction(FrictionLaw):
         Coulomb force [N], axis total, > 0.
     alpha : float
         Shape exponent of the stress-strain curve [-], >= 1 (1: the usual model).
+    sigma2 : float
+        Viscous part [N s/m], axis total, >= 0.
 
     Raises
     ------
@@ -178,6 +185,7 @@ class DahlFriction(FrictionLaw):
     sigma0: float
     fc: float
     alpha: float = 1.0
+    sigma2: float = 0.0
     name = "dahl"
     nonlinear = True
     table_hint = "give sigma0 [N/m], fc [N] (axis totals) and optionally alpha (>= 1)"
@@ -197,6 +205,11 @@ class DahlFriction(FrictionLaw):
             raise ValueError(f"DahlFriction.alpha must be finite and >= 1, got {self.alpha!r} "
                              "(below 1 the rate is not differentiable at steady sliding)")
         object.__setattr__(self, "alpha", alpha)
+        sigma2 = float(self.sigma2)
+        if not (math.isfinite(sigma2) and sigma2 >= 0.0):
+            raise ValueError(f"DahlFriction.sigma2 must be finite and >= 0 N s/m, got "
+                             f"{self.sigma2!r}")
+        object.__setattr__(self, "sigma2", sigma2)
 
     @property
     def ratio(self) -> float:
@@ -205,7 +218,8 @@ class DahlFriction(FrictionLaw):
 
     @classmethod
     def from_table(cls, value) -> DahlFriction:
-        """Build the law from ``[friction.dahl]``: ``sigma0`` [N/m], ``fc`` [N], ``alpha``.
+        """Build the law from ``[friction.dahl]``: ``sigma0`` [N/m], ``fc`` [N], ``alpha``,
+        ``sigma2`` [N s/m].
 
         Parameters
         ----------
@@ -222,25 +236,44 @@ class DahlFriction(FrictionLaw):
             A parameter is missing, unknown or out of range.
         """
         if not isinstance(value, dict) or not {"sigma0", "fc"} <= set(value) <= {
-                "sigma0", "fc", "alpha"}:
-            raise ValueError(f"give sigma0 and fc (and optionally alpha), got {value!r}")
+                "sigma0", "fc", "alpha", "sigma2"}:
+            raise ValueError(f"give sigma0 and fc (and optionally alpha, sigma2), got {value!r}")
         return cls(**value)
 
+    @property
+    def viscous_part(self) -> float:
+        """sigma2 [N s/m]."""
+        return self.sigma2
+
+    def with_viscous(self, c: float) -> DahlFriction:
+        """Return the law with the viscous part ``c`` [N s/m] (the design's C).
+
+        Parameters
+        ----------
+        c : float
+            Viscous damping [N s/m], >= 0.
+
+        Returns
+        -------
+        DahlFriction
+        """
+        return dataclasses.replace(self, sigma2=float(c))
+
     def presliding(self) -> tuple[float, float]:
-        """Return the contact at rest, axis totals: the spring sigma0, no damper.
+        """Return the contact at rest, axis totals: the spring sigma0 and the damper sigma2.
 
         Returns
         -------
         (stiffness, damping) : tuple of float
             Spring [N/m] and damper [N s/m].
         """
-        return self.sigma0, 0.0
+        return self.sigma0, self.sigma2
 
     def sliding_system(self, speed: float) -> control.StateSpace:
-        """Return the contact linearised about steady sliding: no force change at all.
+        """Return the contact linearised about steady sliding: the viscous part alone.
 
-        While sliding F = Fc sgn(v) whatever the speed, and a velocity change does not reach z
-        to first order (h(1) = 0): the linear contact is a zero gain (no damping).
+        While sliding F = Fc sgn(v) + sigma2 v, and a velocity change does not reach z to first
+        order (h(1) = 0): the linear contact is the gain sigma2.
 
         Parameters
         ----------
@@ -250,7 +283,7 @@ class DahlFriction(FrictionLaw):
         Returns
         -------
         control.StateSpace
-            SISO static gain 0 [N s/m].
+            SISO static gain sigma2 [N s/m].
 
         Raises
         ------
@@ -259,7 +292,7 @@ class DahlFriction(FrictionLaw):
         """
         if not (speed and math.isfinite(speed)):
             raise ValueError("the sliding contact needs a finite non-zero speed v0 [m/s]")
-        return control.ss([], [], [], [[0.0]])
+        return control.ss([], [], [], [[self.sigma2]])
 
     def linearisation(self, speed: float = 0.0) -> tuple[float, float, float]:
         """Return (c0, c_v, c_z) of ``w ~ c0 + c_v v + c_z z`` about rest or steady sliding.
@@ -285,7 +318,7 @@ class DahlFriction(FrictionLaw):
 
     def pad_block(self, pad: str, n_pads: int, speed: float = 0.0) -> control.StateSpace:
         """Return the linear part for one pad: ``dz/dt = v - (c0 + c_v v + c_z z) - r``,
-        ``F = sigma0 z / n_pads``.
+        ``F = (sigma0 z + sigma2 v) / n_pads``.
 
         Parameters
         ----------
@@ -304,9 +337,10 @@ class DahlFriction(FrictionLaw):
         """
         v, r, f, force, z = (signal_name(pad, s) for s in ("v_", "r_", "f_", "F_", "z_"))
         c0, cv, cz = self.linearisation(speed)
-        k = self.sigma0 / n_pads
+        k, c = self.sigma0 / n_pads, self.sigma2 / n_pads
         return control.ss([[-cz]], [[1.0 - cv, -1.0, -c0]], [[-k], [k], [1.0]],
-                          [[0.0] * 3] * 3, inputs=[v, r, "one"], outputs=[f, force, z],
+                          [[-c, 0.0, 0.0], [c, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                          inputs=[v, r, "one"], outputs=[f, force, z],
                           states=[z], name=f"friction_{signal_name(pad)}")
 
     def remainder(self):
@@ -394,12 +428,12 @@ class DahlFriction(FrictionLaw):
         return 1e-10 / (self.ratio * step)
 
     def friction_force(self, v, z):
-        """Return the friction force sigma0 z [N], axis total.
+        """Return the friction force sigma0 z + sigma2 v [N], axis total.
 
         Parameters
         ----------
         v : array_like
-            Pad velocity [m/s] (the force does not depend on it).
+            Pad velocity [m/s].
         z : array_like
             The state [m].
 
@@ -408,7 +442,7 @@ class DahlFriction(FrictionLaw):
         numpy.ndarray
             Friction force [N].
         """
-        return self.sigma0 * np.asarray(z, dtype=float) + 0.0 * np.asarray(v, dtype=float)
+        return self.sigma0 * np.asarray(z, dtype=float) + self.sigma2 * np.asarray(v, dtype=float)
 
     def periodic_force(self, velocity, period: float, share: float = 1.0,
                        refine: int = 8) -> np.ndarray:
@@ -492,4 +526,4 @@ class DahlFriction(FrictionLaw):
                     break
             z0 = 0.5 * (low + high)
         period_map(z0)
-        return share * self.sigma0 * out[::refine].copy()
+        return share * (self.sigma0 * out[::refine] + self.sigma2 * v)

@@ -531,6 +531,56 @@ class GMSFriction(FrictionLaw):
         """sigma2 [N s/m]."""
         return self.params.sigma2
 
+    def with_viscous(self, c: float) -> GMSFriction:
+        """Return the law with sigma2 = ``c`` [N s/m].
+
+        Parameters
+        ----------
+        c : float
+            Viscous damping [N s/m], >= 0.
+
+        Returns
+        -------
+        GMSFriction
+        """
+        return GMSFriction(dataclasses.replace(self.params, sigma2=float(c)))
+
+    def steady_force(self, speed: float) -> float:
+        """Return the steady sliding friction ``sgn(v) s(v) + sigma2 v`` [N]: every element
+        slips at its share of the Stribeck curve (Al-Bender et al. 2005, sec II).
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s].
+
+        Returns
+        -------
+        float
+        """
+        v = float(speed)
+        return math.copysign(float(self.params.stribeck(v)), v) + self.params.sigma2 * v
+
+    def steady_slope(self, speed: float) -> float:
+        """Return ``s'(|v|) + sigma2`` [N s/m], the slope of :meth:`steady_force` (at 0 the
+        slope of s is taken as 0).
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s].
+
+        Returns
+        -------
+        float
+        """
+        p = self.params
+        u = abs(float(speed)) / p.vs
+        if u == 0.0:
+            return p.sigma2
+        return (-(p.fs - p.fc) * math.exp(-u ** p.delta) * p.delta * u ** (p.delta - 1.0) / p.vs
+                + p.sigma2)
+
     def presliding(self) -> tuple[float, float]:
         """Return the contact linearised at rest, axis totals: all elements stick, (sum k_i, sum
         sigma1_i + sigma2).

@@ -50,6 +50,7 @@ friction compensation", European Journal of Control 4 (1998) 176-195.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -65,6 +66,8 @@ from ..lugre import (
     lugre_force,
     lugre_jacobian,
     sliding_linearisation,
+    steady_state_friction,
+    steady_state_slope,
     stribeck_curve,
 )
 
@@ -416,6 +419,50 @@ class LuGreFriction(FrictionLaw):
     def viscous_part(self) -> float:
         """sigma2 [N s/m]."""
         return self.params.sigma2
+
+    def with_viscous(self, c: float) -> LuGreFriction:
+        """Return the law with sigma2 = ``c`` [N s/m].
+
+        Parameters
+        ----------
+        c : float
+            Viscous damping [N s/m], >= 0.
+
+        Returns
+        -------
+        LuGreFriction
+        """
+        return LuGreFriction(dataclasses.replace(self.params, sigma2=float(c)))
+
+    def steady_force(self, speed: float) -> float:
+        """Return ``g(v) sgn(v) + sigma2 v`` [N] (:func:`servotune.friction.lugre.
+        steady_state_friction`).
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s].
+
+        Returns
+        -------
+        float
+        """
+        return float(steady_state_friction(self.params, float(speed)))
+
+    def steady_slope(self, speed: float) -> float:
+        """Return ``g'(v) sgn(v) + sigma2`` [N s/m] (:func:`servotune.friction.lugre.
+        steady_state_slope`; at 0 the slope of g is taken as 0).
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s].
+
+        Returns
+        -------
+        float
+        """
+        return float(steady_state_slope(self.params, float(speed)))
 
     def presliding(self) -> tuple[float, float]:
         """Return the contact linearised at rest, axis totals: spring sigma0 and damper sigma1 +

@@ -76,6 +76,48 @@ class ViscousFriction(FrictionLaw):
         """c [N s/m]."""
         return self.c
 
+    def with_viscous(self, c: float) -> ViscousFriction:
+        """Return the law with damping ``c`` [N s/m] (the whole law is viscous).
+
+        Parameters
+        ----------
+        c : float
+            Viscous damping [N s/m], >= 0.
+
+        Returns
+        -------
+        ViscousFriction
+        """
+        return ViscousFriction(c)
+
+    def steady_force(self, speed: float) -> float:
+        """Return c v [N].
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s].
+
+        Returns
+        -------
+        float
+        """
+        return self.c * float(speed)
+
+    def steady_slope(self, speed: float) -> float:
+        """Return c [N s/m] at every speed.
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed v [m/s] (not used).
+
+        Returns
+        -------
+        float
+        """
+        return self.c
+
     def presliding(self) -> tuple[float, float]:
         """Return the contact linearised at rest, axis totals: no spring, the damper c.
 
