@@ -24,6 +24,7 @@ from .peaks import BandPeak, ModeBand, band_peak, extreme_edge, mode_band
 from .plant import (
     Contact,
     UnstableLoopError,
+    build_contact,
     build_plant,
     contact_kind,
     contact_kinds,
@@ -171,7 +172,7 @@ def axis_contact(axis: Axis, kind: str, amplitude: float | None = None,
                              f"meaning for the {kind!r} contact")
     if axis.friction is None:
         if not spec.needs_friction:
-            return spec.build(None, **{p: values[p] for p in spec.parameters})
+            return build_contact(kind, None, **{p: values[p] for p in spec.parameters})
         axis.pads  # raises the clear error  # noqa: B018
     omega = None if frequency_hz is None else RAD_S_PER_HZ * frequency_hz
     return friction_contact(axis.friction, kind, amplitude=amplitude, omega=omega, v0=speed,

@@ -542,7 +542,7 @@ def _setting(axis: Axis, structure, pads, regime) -> _Setting:
     pads = tuple(axis.pads if pads is None and axis.friction is not None else (pads or ()))
     c = float(axis.friction.viscous) if axis.friction is not None else 0.0
     if regime is None and pads:
-        from .design import axis_regimes
+        from .regimes import axis_regimes
 
         models = axis_regimes(axis, c)
         sliding = [m for m in models if m.kind == "sliding" and m.sample == "nominal"]
@@ -716,7 +716,7 @@ def commissioning_design(axis: Axis, drive: Drive | None = None,
         The pad DOFs (default ``axis.pads``).
     regime : RegimeModel, optional
         The model the loops are measured in (default: the sliding model of the nominal friction
-        at the lowest feed speed of :func:`servotune.design.axis_regimes`; the viscous pads
+        at the lowest feed speed of :func:`servotune.regimes.axis_regimes`; the viscous pads
         when the axis has no feed speeds).
     a : float
         The symmetric optimum's parameter to start from (2, the classic choice).
@@ -821,7 +821,7 @@ def textbook_design(axis: Axis, drive: Drive | None = None, structure: ModalMode
 def compliance_peaks(axis: Axis, design: BaselineDesign, omega=None) -> tuple[dict, ...]:
     """Return the work-piece compliance peak of a baseline in each regime model of the axis.
 
-    Each model of :func:`servotune.design.axis_regimes` with its contact at the design's C
+    Each model of :func:`servotune.regimes.axis_regimes` with its contact at the design's C
     (``model.contact(C)``), the design's drive, the closed loop of
     :func:`servotune.closed_loop.closed_loop` (sampled-data for a digital drive).
 
@@ -840,7 +840,7 @@ def compliance_peaks(axis: Axis, design: BaselineDesign, omega=None) -> tuple[di
         Per model: ``model`` (its name), ``stable``, ``peak`` [m/N] and ``frequency_hz``
         (None when unstable).
     """
-    from .design import axis_regimes
+    from .regimes import axis_regimes
 
     band = axis.requirements.band
     omega = np.geomspace(*band, 600) if omega is None else np.asarray(omega, dtype=float)

@@ -20,8 +20,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-from .units import RAD_S_PER_HZ
-
 __all__ = ["CONTACT_PARAMETERS", "ContactKind", "ContactParameter", "contact_kind",
            "contact_kinds", "register_contact_kind"]
 
@@ -71,10 +69,12 @@ class ContactKind:
         The kind (``Contact.kind``, ``--contact``).
     summary : str
         One line for help texts.
-    build : callable
+    build : callable or None
         ``build(friction, **parameters) -> Contact`` with ``friction`` a
         :class:`GuideWayFriction` (None for kinds that need no friction) and the parameters of
-        :data:`CONTACT_PARAMETERS` it uses (the others None).
+        :data:`CONTACT_PARAMETERS` it uses (the others None); None for the kinds servotune
+        builds itself (:func:`servotune.plant.build_contact`), so that this module imports
+        nothing of the plant.
     required, optional : tuple of str
         The parameters it needs and those it may take.
     purpose : str
@@ -99,7 +99,7 @@ class ContactKind:
 
     name: str
     summary: str
-    build: Callable = field(compare=False)
+    build: Callable | None = field(compare=False)
     required: tuple[str, ...] = ()
     optional: tuple[str, ...] = ()
     purpose: str = ""
@@ -200,58 +200,19 @@ def contact_kind(name: str) -> ContactKind:
         raise ValueError(f"contact kind must be one of {contact_kinds()}, got {name!r}") from None
 
 
-def _presliding(friction, **_):
-    from .plant import Contact
-
-    k, c = friction.law.presliding()
-    return Contact("stiction", stiffness=k, damping=c,
-                   note=f"stiction ({friction.law.name} presliding): {k:.3g} N/m, {c:.3g} N s/m")
-
-
-def _describing(friction, amplitude, frequency_hz, **_):
-    from .plant import Contact
-
-    ceq, keq = friction.law.describing_function(amplitude, RAD_S_PER_HZ * frequency_hz)
-    return Contact.equivalent(float(ceq), max(float(keq), 0.0), amplitude)
-
-
-def _locked(friction, **_):
-    from .plant import Contact
-
-    return Contact.locked()
-
-
-def _free(friction, **_):
-    from .plant import Contact
-
-    return Contact.free()
-
-
-def _viscous(friction, c=None, **_):
-    from .plant import Contact
-
-    return Contact.viscous(friction.viscous if c is None else c)
-
-
-def _sliding(friction, speed, **_):
-    from .plant import Contact
-
-    return Contact.sliding(friction.law.sliding_system(speed), speed)
-
-
 for _kind in (
-    ContactKind("locked", "locked pads", _locked, pads="locked"),
-    ContactKind("stiction", "the friction law's presliding spring and damper", _presliding),
+    ContactKind("locked", "locked pads", None, pads="locked"),
+    ContactKind("stiction", "the friction law's presliding spring and damper", None),
     ContactKind("viscous", "the axis' viscous-only damping, or --c",
-                _viscous, optional=("c",)),
+                None, optional=("c",)),
     ContactKind("equivalent", "the friction law's describing function at --amplitude and "
-                "--frequency-hz", _describing, required=("amplitude", "frequency_hz"),
+                "--frequency-hz", None, required=("amplitude", "frequency_hz"),
                 purpose="the vibration amplitude [m] and frequency [Hz] of the describing "
                         "function", example="--amplitude 2e-6 --frequency-hz 50"),
     ContactKind("sliding", "the friction law linearised at --speed",
-                _sliding, required=("speed",),
+                None, required=("speed",),
                 purpose="the sliding speed [m/s] of the linearisation",
                 example="--speed 0.03"),
-    ContactKind("free", "no friction", _free, pads="free", needs_friction=False),
+    ContactKind("free", "no friction", None, pads="free", needs_friction=False),
 ):
     register_contact_kind(_kind)

@@ -59,9 +59,10 @@ from .drive import Drive, drive_blocks, winding_block
 from .friction.guideway import GuideWayFriction
 from .interconnect import connect
 from .structure.model import ModalModel, signal_name
-from .units import HZ_PER_RAD_S
+from .units import HZ_PER_RAD_S, RAD_S_PER_HZ
 
-__all__ = ["Contact", "ContactKind", "ContactParameter", "friction_contact", "build_plant",
+__all__ = ["Contact", "ContactKind", "ContactParameter", "friction_contact", "build_contact",
+           "build_plant",
            "build_open_plant",
            "loop_transfer", "CONTACT_KINDS", "CONTACT_PARAMETERS", "UnstableLoopError",
            "contact_kind", "contact_kinds", "register_contact_kind"]
@@ -265,6 +266,54 @@ class Contact:
 CONTACT_KINDS = contact_kinds()
 
 
+# ------------------------------------------------- the builders of servotune's contact kinds
+def _presliding(friction, **_):
+    k, c = friction.law.presliding()
+    return Contact("stiction", stiffness=k, damping=c,
+                   note=f"stiction ({friction.law.name} presliding): {k:.3g} N/m, {c:.3g} N s/m")
+
+
+def _describing(friction, amplitude, frequency_hz, **_):
+    ceq, keq = friction.law.describing_function(amplitude, RAD_S_PER_HZ * frequency_hz)
+    return Contact.equivalent(float(ceq), max(float(keq), 0.0), amplitude)
+
+
+def _viscous(friction, c=None, **_):
+    return Contact.viscous(friction.viscous if c is None else c)
+
+
+def _sliding(friction, speed, **_):
+    return Contact.sliding(friction.law.sliding_system(speed), speed)
+
+
+_BUILDERS = {"locked": lambda friction, **_: Contact.locked(),
+             "free": lambda friction, **_: Contact.free(),
+             "stiction": _presliding, "viscous": _viscous, "equivalent": _describing,
+             "sliding": _sliding}
+
+
+def build_contact(kind: str, friction, **parameters) -> Contact:
+    """Return the contact of a registered kind built from the axis' friction.
+
+    Parameters
+    ----------
+    kind : str
+        A registered contact kind (:func:`contact_kinds`).
+    friction : GuideWayFriction or None
+        The axis' friction (None for a kind that needs none).
+    **parameters
+        The kind's parameters (:attr:`ContactKind.parameters`).
+
+    Returns
+    -------
+    Contact
+        Built by the kind's own ``build``, or by servotune's builder of its own kinds.
+    """
+    spec = contact_kind(kind)
+    build = spec.build if spec.build is not None else _BUILDERS[spec.name]
+    return build(friction, **parameters)
+
+
 def friction_contact(friction: GuideWayFriction, kind: str, amplitude: float | None = None,
                      omega: float | None = None, v0: float | None = None,
                      c: float | None = None) -> Contact:
@@ -305,7 +354,7 @@ def friction_contact(friction: GuideWayFriction, kind: str, amplitude: float | N
     if missing:
         raise ValueError(f"the {kind!r} contact needs {_listing(spec.required)} "
                          f"({spec.purpose})")
-    return spec.build(friction, **{p: values[p] for p in spec.parameters})
+    return build_contact(kind, friction, **{p: values[p] for p in spec.parameters})
 
 
 def _listing(names) -> str:

@@ -44,6 +44,7 @@ from types import MappingProxyType
 import control
 import numpy as np
 
+from .closed_loop import axis_compliance
 from .friction.law import FrictionLaw
 from .friction.laws.lugre import LuGreFriction
 from .friction.lugre import LuGreParameters
@@ -62,6 +63,8 @@ __all__ = [
     "as_law",
     "regime_models",
     "stribeck_slope",
+    "axis_regimes",
+    "process_amplitude",
 ]
 
 REGIME_KINDS = ("presliding", "describing", "sliding", "viscous")
@@ -780,3 +783,89 @@ def friction_spread(nominal: LuGreParameters | None, spread: Mapping | None = No
     if variation:
         return FrictionSpread.absolute(nominal, variation)
     return None
+
+
+# ------------------------------------------------------------- the regimes of an axis
+def process_amplitude(axis, drive, c: float, force_pp: float,
+                      friction=None) -> tuple[float, float]:
+    """Return the pad vibration amplitude and frequency at the standing regime's compliance peak.
+
+    The work-piece compliance ``wp.x`` is evaluated with the pads on the LuGre presliding
+    contact (spring sigma0, damper sigma1 + C) at 3000 log-spaced frequencies over
+    ``axis.requirements.band``; at its peak, the pad amplitude is the mean magnitude of the
+    pads' receptances to the work-piece force times half the peak-to-peak force. This is the
+    amplitude of the describing-function model of the standing regime.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis (structure, pads, requirements; its friction unless ``friction`` is given).
+    drive : Drive or None
+        The drive closing the loop; None for the structure without a motor.
+    c : float
+        Viscous guide-way damping C [N s/m] added to sigma1 in the presliding contact.
+    force_pp : float
+        Peak-to-peak work-piece force [N].
+    friction : FrictionLaw or LuGreParameters, optional
+        The pads' friction law; default the axis' (``axis.friction.law``).
+
+    Returns
+    -------
+    amplitude : float
+        Pad vibration amplitude [m] (half the peak to peak), at least 1e-12.
+    frequency : float
+        Angular frequency [rad/s] of the compliance peak.
+    """
+    law = as_law(axis.friction.law if friction is None else friction)
+    omega = 2 * math.pi * np.geomspace(*(np.array(axis.requirements.band) / (2 * math.pi)),
+                                       3000)
+    k, d = law.with_viscous(0.0).presliding()
+    contact = Contact.stiction(k, d, c) if k > 0 else Contact.viscous(d + c)
+    h = axis_compliance(axis.structure, omega, drive, contact, axis.pads,
+                        outputs=("wp.x", *axis.pads))
+    i = int(np.argmax(np.abs(h[0])))
+    amplitude = float(np.mean(np.abs(h[1:, i]))) * 0.5 * force_pp
+    return max(amplitude, 1e-12), float(omega[i])
+
+
+def axis_regimes(axis, c: float | None = None) -> tuple[RegimeModel, ...]:
+    """Return the regime models of an axis (:func:`servotune.regimes.regime_models`).
+
+    Without ``[drive]``, ``[friction]`` or ``[operation]``: the viscous pads alone (the paper's
+    sec 4.1). Else standing (presliding, and the describing function at the process amplitude
+    of :func:`process_amplitude` under ``[operation] process_force_pp``, 600 N when unset) and
+    feeding at each feed speed, for the nominal friction, the corners of
+    ``[tuning] friction_spread`` and the extra ``[tuning]`` friction samples; plus a
+    rapid-traverse model (sliding at ``[operation] rapid_speed``, 0.1 m/s when unset, not
+    cutting) for the loops when the axis has no feed speeds.
+
+    Parameters
+    ----------
+    axis : Axis
+        The axis description.
+    c : float, optional
+        Viscous guide-way damping C [N s/m] at which the process amplitude is computed;
+        default the axis' ``[friction] viscous``. (The process amplitude is computed on the
+        structure without a motor.)
+
+    Returns
+    -------
+    tuple of RegimeModel
+        The models, the nominal friction first.
+    """
+    if axis.drive is None or axis.friction is None or axis.operation is None:
+        return regime_models(None, None)
+    op = axis.operation
+    c = axis.friction.viscous if c is None else c
+    amplitude = frequency = None
+    if op.standing:
+        force = op.process_force_pp or 600.0
+        amplitude, frequency = process_amplitude(axis, None, c, force)
+    models = regime_models(axis.friction.law, op, amplitude, frequency,
+                           dict(axis.tuning.friction_spread),
+                           extra_samples=axis.tuning.friction_samples)
+    if not op.feed_speeds:
+        speed = op.rapid_speed or 0.1
+        models += (RegimeModel(f"traverse {speed * 1e3:.3g} mm/s", "sliding", axis.friction.law,
+                               speed=speed, cutting=False),)
+    return models

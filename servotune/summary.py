@@ -365,7 +365,7 @@ def baseline_table(job) -> Table | None:
                      _f(claim, "{:.3g}"), _f(nonlinear, "{:.3g}"),
                      change(claim, c.get("claimed_peak_m_per_n")),
                      change(nonlinear, c.get("nonlinear_peak_m_per_n"))))
-    d = base["commissioning"]["design"]
+    d = base["commissioning"]["design"] or {}
     notes = [f"commissioning ({d.get('rule', 'servotune.baseline')}): current PI "
              f"{d['current_kp']:.4g} V/A, {d['current_ti'] * 1e3:.4g} ms; velocity PI "
              f"{d['velocity_kp']:.4g} N m s/rad, {d['velocity_ti'] * 1e3:.4g} ms; Kv "
@@ -379,6 +379,8 @@ def baseline_table(job) -> Table | None:
              "all at the nominal friction; the baselines' nonlinear peaks by harmonic balance "
              "at 1 and 3 x the process force, the tuned design's by the verdict"]
     for key in ("commissioning", "textbook"):
+        if base[key].get("note"):
+            notes.append(base[key]["note"])
         spread = base[key].get("spread_unstable")
         if spread:
             notes.append(f"{key}: unstable at {len(spread)} corner model(s) of the friction "

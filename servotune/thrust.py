@@ -178,8 +178,9 @@ class ThrustBudget:
         Moving mass referred to the slide [kg].
     friction : FrictionLaw or LuGreParameters
         Axis-total friction law (its viscous part is replaced by the C of each evaluation; its
-        steady sliding friction without it, :meth:`~servotune.friction.law.FrictionLaw.
-        steady_force`, is g(v)). LuGre parameters are taken as their law.
+        steady sliding friction without it,
+        :meth:`~servotune.friction.law.FrictionLaw.steady_force`, is g(v)). LuGre parameters
+        are taken as their law.
     operation : Operation
     limits : DriveLimits, optional
         The motor's torques over speed (:meth:`DriveLimits.peak`, :meth:`DriveLimits.continuous`)

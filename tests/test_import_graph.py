@@ -24,8 +24,6 @@ PRESENTATION = ("servotune.plots", "servotune.regime_plots", "servotune.captions
 KNOWN_CYCLES = {
     ("servotune.friction.equivalent", "servotune.friction.lugre", "servotune.plots",
      "servotune.twomass"),
-    ("servotune.contact_kinds", "servotune.plant"),
-    ("servotune.baseline", "servotune.design"),
 }
 
 #: Known upward imports (module, presentation module): ``.plot()`` methods of results, the
@@ -39,7 +37,6 @@ KNOWN_UPWARD = {
     ("servotune.measured.ema", "servotune.measured.figures"),
     ("servotune.measured.update", "servotune.measured.figures"),
     ("servotune.simulate.result", "servotune.plots"),
-    ("servotune.study.runner", "servotune.cli._common"),
     ("servotune.study.summary", "servotune.report"),
     ("servotune.template", "servotune.report"),
     ("servotune.twomass", "servotune.plots"),

@@ -279,8 +279,8 @@ def test_the_worst_samples_of_a_study_become_friction_samples_of_every_regime(tm
         by_sample.setdefault(m.sample, []).append(m)
     assert set(by_sample) == {"nominal", "study sample 1", "study sample 3"}
     assert all(len(v) == 2 for v in by_sample.values())  # standing + feeding each
-    assert by_sample["study sample 3"][0].friction.fc == 2003.0
-    assert by_sample["study sample 3"][0].friction.fs == nominal.fs
+    assert by_sample["study sample 3"][0].friction.params.fc == 2003.0
+    assert by_sample["study sample 3"][0].friction.params.fs == nominal.fs
     with pytest.raises(ValueError, match="varied no LuGre parameter"):
         _table(tmp_path / "other.parquet", [{"sample_id": 0, "status": "done",
                                              "in.drive.velocity_loop.kp": 3.0,

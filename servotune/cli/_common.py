@@ -50,12 +50,13 @@ import contextlib
 import json
 import math
 import os
-import re
 import shutil
 import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+from ..names import safe_name
 
 __all__ = [
     # errors
@@ -435,25 +436,7 @@ def default_notes(axis) -> list[str]:
 
 
 # --- the output policy -------------------------------------------------------------------------
-
-_SAFE = re.compile(r"[^A-Za-z0-9_.+-]+")
-
-
-def safe_name(name: str, fallback: str = "unnamed") -> str:
-    """A folder-name part made of letters, digits and ``_ . + -`` only, never ``..`` or a
-    leading dot, at most 80 characters; so that a name cannot point outside ``--out``.
-
-    Examples
-    --------
-    >>> safe_name("../../x")
-    'x'
-    >>> safe_name("X axis (rev 2)")
-    'X_axis_rev_2'
-    """
-    text = _SAFE.sub("_", str(name))
-    text = re.sub(r"\.{2,}", "_", text)
-    text = re.sub(r"_{2,}", "_", text).strip("._-")
-    return text[:80] or fallback
+# (safe_name, the rule for names in file names, is servotune.names.safe_name)
 
 
 class RunOutput:

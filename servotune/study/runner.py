@@ -95,7 +95,7 @@ def study_folder(study: Study, out) -> Path:
     pathlib.Path
         The study's folder (not created here).
     """
-    from ..cli._common import safe_name
+    from ..names import safe_name
 
     return Path(out) / f"study_{safe_name(study.name)}"
 

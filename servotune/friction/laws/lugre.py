@@ -435,8 +435,8 @@ class LuGreFriction(FrictionLaw):
         return LuGreFriction(dataclasses.replace(self.params, sigma2=float(c)))
 
     def steady_force(self, speed: float) -> float:
-        """Return ``g(v) sgn(v) + sigma2 v`` [N] (:func:`servotune.friction.lugre.
-        steady_state_friction`).
+        """Return ``g(v) sgn(v) + sigma2 v`` [N]
+        (:func:`servotune.friction.lugre.steady_state_friction`).
 
         Parameters
         ----------
@@ -450,8 +450,8 @@ class LuGreFriction(FrictionLaw):
         return float(steady_state_friction(self.params, float(speed)))
 
     def steady_slope(self, speed: float) -> float:
-        """Return ``g'(v) sgn(v) + sigma2`` [N s/m] (:func:`servotune.friction.lugre.
-        steady_state_slope`; at 0 the slope of g is taken as 0).
+        """Return ``g'(v) sgn(v) + sigma2`` [N s/m]
+        (:func:`servotune.friction.lugre.steady_state_slope`; at 0 the slope of g is taken as 0).
 
         Parameters
         ----------
