@@ -4,6 +4,7 @@ the axis glue; the table3 and verify commands (in-process)."""
 import json
 import pickle
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -220,3 +221,14 @@ def test_bundled_axis_slides_without_stick_slip_at_30_mm_s():
     assert e.relative_residual < 1e-3
     constant = run(dataclasses.replace(setup.lugre, sigma1_decay_speed=None))
     assert constant["v_pad1_x"][late].min() < 0.1 * v        # the pads stop: stick-slip
+
+
+def test_the_axis_named_by_its_description_is_the_axis(tmp_path):
+    """table3 takes an axis folder or its axis.toml, as load_axis does."""
+    from servotune.cli.table3 import load_setup
+
+    paper = Path(__file__).resolve().parents[1] / "models" / "paper_x_axis"
+    by_file, by_folder = load_setup(paper / "axis.toml"), load_setup(paper)
+    assert by_file.name == by_folder.name and by_file.law == by_folder.law
+    with pytest.raises(FileNotFoundError, match=r"has no axis\.toml"):
+        load_setup(tmp_path)

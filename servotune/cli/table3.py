@@ -65,6 +65,8 @@ def load_setup(path, continuous: bool = True):
     from ..simulate.setup import axis_setup
 
     path = Path(path)
+    if path.is_file() and path.name == "axis.toml":
+        path = path.parent          # the axis named by its description, as load_axis takes it
     if not (path / "axis.toml").is_file():
         raise FileNotFoundError(f"{path} has no axis.toml; give an axis folder such as "
                                 f"{default_axis()}")
