@@ -101,3 +101,26 @@ def test_lowest_modes_checks_a_count_by_sturm_by_default(monkeypatch):
     assert np.allclose(modes.eigenvalues, 4 * np.sin(j * np.pi / (2 * (n + 1))) ** 2,
                        rtol=1e-9)
     assert modes.complete_below > modes.eigenvalues[-1]
+
+
+def test_an_off_diagonal_pivot_moves_the_shift(monkeypatch):
+    # K - 5 M has a 2x2 block [[0, 1], [1, 0]]: SuperLU must pivot off the diagonal there, the
+    # inertia is then not in diag(U) and the count is repeated at a slightly moved shift
+    n = 300
+    d = np.linspace(1.0, 10.0, n)
+    k = sp.lil_array(sp.diags_array(d))
+    k[10, 10] = k[11, 11] = 5.0
+    k[10, 11] = k[11, 10] = 1.0
+    k, m = k.tocsc(), sp.eye_array(n, format="csc")
+    w = scipy.linalg.eigvalsh(k.toarray())
+    same = []
+    original = solvers._superlu
+
+    def spy(a, *args):
+        lu = original(a, *args)
+        same.append(bool(np.array_equal(lu.perm_r, lu.perm_c)))
+        return lu
+
+    monkeypatch.setattr(solvers, "_superlu", spy)
+    assert count_eigenvalues_below(k, m, 5.0) == int(np.sum(w < 5.0))
+    assert same[0] is False and same[-1] is True
