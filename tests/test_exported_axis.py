@@ -440,10 +440,35 @@ def test_requirements_the_initial_design_misses_are_infeasible(monkeypatch):
                             requirements=Requirements(ms_velocity_max=1.01, ms_position_max=1.5),
                             bounds={"kp": (kp0, 2 * kp0)})
     _not_converging(monkeypatch)
-    with pytest.raises(RequirementsNotMetError, match="requirements infeasible") as info:
+    with pytest.raises(RequirementsNotMetError, match="requirements not met") as info:
         tune(problem, starts=1)
     assert "'Ms velocity loop'" in str(info.value)
     assert "the initial design does not meet the requirements" in str(info.value)
+    # the optimiser stopped at its iteration limit: that shows no infeasibility, and it says so
+    assert "without showing that no such design exists" in str(info.value)
+    assert "infeasible" not in str(info.value)
+
+
+def test_requirements_ipopt_finds_locally_infeasible_are_called_so(monkeypatch):
+    from servotune.requirements import Requirements
+
+    drive = small_drive()
+    kp0 = drive.velocity_loop.kp
+    problem = TuningProblem(small_axis(), PADS, c=5e4, drive=drive, free=("kp",),
+                            requirements=Requirements(ms_velocity_max=1.01, ms_position_max=1.5),
+                            bounds={"kp": (kp0, 2 * kp0)})
+    solve = Solver.solve
+
+    def infeasible(self, *args, **kwargs):
+        sol = solve(self, *args, **kwargs)
+        return dataclasses.replace(sol, stats={**sol.stats, "success": False,
+                                               "return_status": "Infeasible_Problem_Detected"})
+
+    monkeypatch.setattr(Solver, "solve", infeasible)
+    with pytest.raises(RequirementsNotMetError, match="requirements infeasible within the "
+                       "bounds") as info:
+        tune(problem, starts=1)
+    assert "'Ms velocity loop'" in str(info.value)
 
 
 def test_tune_prints_the_reason_when_it_keeps_the_initial_design(tmp_path, capsys,

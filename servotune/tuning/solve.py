@@ -1013,8 +1013,10 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
     NoStableStartError
         When no candidate keeps the models stable.
     RequirementsNotMetError
-        "requirements infeasible": no start reaches a feasible design and the initial design
-        does not meet the requirements either; the message names the binding constraint.
+        "requirements infeasible" (IPOPT found the constraints locally infeasible) or
+        "requirements not met" (the optimiser stopped otherwise): no start reaches a feasible
+        design and the initial design does not meet the requirements either; the message names
+        the binding constraint.
     TuningDidNotConvergeError
         "the optimiser found no better design": the frequency constraints were met but the
         objective did not settle, and the initial design does not meet every requirement.
@@ -1205,6 +1207,10 @@ class _NoOptimum:
                 f"(IPOPT: {self.status})")
 
 
+#: IPOPT's return statuses that say the constraints are (locally) infeasible; any other
+#: stop of a start that violates a constraint proves nothing about feasibility.
+LOCALLY_INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")
+
 #: What an axis file changes to relax each kind of constraint (by the start of its name).
 FIXES = (
     ("thrust", "a stronger motor ([drive.motor] torque_continuous, torque_peak, torque_speed), "
@@ -1261,9 +1267,17 @@ def _raise_infeasible(why: _NoOptimum, initial_checks):
             "requirements infeasible within the bounds: the binding constraint is closed-loop "
             f"stability ({why}), and {initial}; relax the Ms limits, narrow the bounds towards "
             "the initial design or add starts")
+    if why.status in LOCALLY_INFEASIBLE:
+        raise RequirementsNotMetError(
+            f"requirements infeasible within the bounds: the binding constraint is "
+            f"'{why.constraint}' ({why}), and {initial}; to fix: {_fixes(why.constraint)}")
+    # the optimiser stopped (an iteration limit, a failed line search): no design found, but
+    # none shown not to exist either
     raise RequirementsNotMetError(
-        f"requirements infeasible within the bounds: the binding constraint is "
-        f"'{why.constraint}' ({why}), and {initial}; to fix: {_fixes(why.constraint)}")
+        f"requirements not met: no start reached a design that meets them within the bounds "
+        f"(the constraint still violated is '{why.constraint}': {why}; the optimiser stopped "
+        f"without showing that no such design exists), and {initial}; to fix: "
+        f"{_fixes(why.constraint)}, or try more starts (--starts)")
 
 
 def _active(problem: TuningProblem, design: Design, solver: Solver, best: Solution) -> list:
