@@ -491,6 +491,15 @@ def _structure(table, folder: Path, file: Path) -> ModalModel:
                            "give the highest fixed-interface mode to keep, in Hz (a number "
                            "> 0, e.g. 500.0)")
             index = matrices.index(boundary)
+            interior = matrices.mass.shape[0] - len(set(index))
+            n_modes = spec.get("n_modes")
+            if n_modes is not None and n_modes > interior:
+                raise _err(file, "[structure] reduce.n_modes",
+                           f"{n_modes} fixed-interface modes asked, but the structure has "
+                           f"{interior} interior DOF(s) ({matrices.mass.shape[0]} DOFs, "
+                           f"{len(set(index))} at the boundary)",
+                           f"give at most {interior} (all of them: no reduction error), or "
+                           "f_max_hz instead")
             return craig_bampton(matrices.mass, matrices.stiffness, index,
                                  n_modes=spec.get("n_modes"), f_max_hz=spec.get("f_max_hz"),
                                  damping_ratio=zeta, boundary_names=boundary)

@@ -164,6 +164,10 @@ CASES = [
     ("axis-reduce-n-modes-negative", lambda t, s: ["modes", _fe_axis(
         t, s, 'boundary = ["pad1.x", "pad2.x", "wp.x", "motor.rotor", "motor.stator"]\n'
               'n_modes = -1')], 1, "[structure] reduce.n_modes: got -1; give a whole number"),
+    ("axis-reduce-n-modes-beyond-the-interior", lambda t, s: ["modes", _fe_axis(
+        t, s, 'boundary = ["pad1.x", "pad2.x", "wp.x", "motor.rotor", "motor.stator"]\n'
+              'n_modes = 100')], 1, "[structure] reduce.n_modes: 100 fixed-interface modes "
+     "asked, but the structure has"),
     ("axis-reduce-two-cutoffs", lambda t, s: ["modes", _fe_axis(
         t, s, 'boundary = ["pad1.x", "pad2.x", "wp.x", "motor.rotor", "motor.stator"]\n'
               'n_modes = 1\nf_max_hz = 500.0')], 1,
