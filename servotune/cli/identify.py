@@ -17,8 +17,16 @@ torque [rad/(s N m)] (:mod:`servotune.measured.speed_plant`): with ``--axis`` it
 with the axis' speed plant (guide ways in presliding, the ``stiction`` contact) and the
 velocity loop is closed on the measurement by the axis' own drive (its PI, current loop,
 sampling, delays and speed measurement), non-parametrically, as auto-tuners do: the margins,
-Ms and bandwidth of that loop beside the model's. ``--kind closed-loop`` (the work-piece
-compliance under position control) is refused with exit status 2: not in this version.
+Ms and bandwidth of that loop beside the model's.
+
+``--kind closed-loop`` reads the work-piece compliance at ``--dof`` measured with the axis
+under position control by its own drive and the guide ways standing (the pads on the
+``stiction`` contact), the quantity ``servotune compliance AXIS --contact stiction`` computes
+(:mod:`servotune.measured.closed_loop`): its modes are identified as for ``structure`` (they
+are the closed loop's poles, not the structure's modes), and with ``--axis`` the same stored
+modes' frequencies and damping ratios are fitted so that the model's closed-loop compliance
+(sampled-data for a digital drive, or the drive in continuous time with ``--continuous``)
+matches it.
 """
 
 from __future__ import annotations
@@ -43,8 +51,9 @@ UPDATE_FIGURE = "model_update.png"
 SPEED_PLANT_FIGURE = "speed_plant.png"
 UPDATED_AXIS = "updated_axis"
 KINDS = ("structure", "speed-plant", "closed-loop")
-NOT_DONE = ("a measured closed-loop work-piece compliance (--kind closed-loop) is not in this "
-            "version")
+NOT_DONE = ("a measured speed plant in place of the model's in the velocity-loop tuning "
+            "(--kind speed-plant closes the axis' loop on it but servotune tune does not tune on "
+            "it) is not in this version")
 _FREQUENCY = number(0.0, 1e6, low_open=True, example=120, unit="Hz")
 _ORDER = number(5, 200, integer=True, example=40)
 QUANTITIES = ("receptance", "mobility", "accelerance", "speed_per_torque")
@@ -83,7 +92,12 @@ def add_parser(subparsers) -> None:
                     "--axis (needed; guide ways in presliding) and closes the velocity loop on "
                     "it with the axis' drive (PI, current loop, sampling, delays, speed by "
                     "backward difference): margins, Ms and bandwidth, measured and model; writes "
-                    "speed_plant.png. Not yet: --kind closed-loop.")
+                    "speed_plant.png. --kind closed-loop reads the work-piece compliance at "
+                    "--dof measured under position control by the axis' drive, guide ways "
+                    "standing (what servotune compliance --contact stiction computes): its "
+                    "modes as for structure and, with --axis, the same stored modes fitted so "
+                    "that the model's closed-loop compliance (sampled-data for a digital "
+                    "drive; --continuous for the drive in continuous time) matches it.")
     p.add_argument("files", nargs="+", metavar="FRF_FILE",
                    help="CSV (f_hz with re,im or mag,phase_deg; '# quantity:' and '# units:' "
                         "comment lines) or UFF dataset 58 (.uff, .unv); several FRFs of one "
@@ -93,7 +107,8 @@ def add_parser(subparsers) -> None:
                    help="what was measured: 'structure' (FRFs of the machine structure, e.g. "
                         "hammer tests at the work piece, drive off, pads stuck); 'speed-plant' "
                         "(the drive's measuring function: motor speed over motor torque, "
-                        "rad/s/N m; needs --axis); 'closed-loop' is not in this version")
+                        "rad/s/N m; needs --axis); 'closed-loop' (the work-piece compliance "
+                        "under position control by the axis' drive, guide ways standing)")
     p.add_argument("--axis", default=None, metavar="AXIS",
                    help="axis folder to update to the measurement (the folder itself is never "
                         "changed: the updated copy goes to "
@@ -117,9 +132,9 @@ def add_parser(subparsers) -> None:
                    help="take the poles nearest to these natural frequencies [Hz] instead of "
                         "the automatic rule")
     p.add_argument("--continuous", action="store_true",
-                   help="with --kind speed-plant: the axis' drive in continuous time, as the "
-                        "paper models it (no sampling, no delays), instead of the digital "
-                        "drive of [drive.sampling]")
+                   help="with --kind speed-plant or closed-loop: the axis' drive in "
+                        "continuous time, as the paper models it (no sampling, no delays), "
+                        "instead of the digital drive of [drive.sampling]")
     add_common_options(p, plots=True)
     p.set_defaults(func=run)
 
@@ -144,14 +159,14 @@ def run(args) -> int:
     if args.band_hz is not None and args.band_hz[0] >= args.band_hz[1]:
         raise UsageError(f"--band-hz {args.band_hz[0]:g} {args.band_hz[1]:g}: the low "
                          "frequency must be below the high one")
-    if args.kind == "closed-loop":
-        raise UsageError(f"--kind closed-loop: {NOT_DONE}; give --kind structure (drive off, "
-                         "pads stuck) or --kind speed-plant (the drive's measuring function)")
     if args.kind == "speed-plant":
         return _run_speed_plant(args)
-    if args.continuous:
-        raise UsageError("--continuous: the drive's model serves --kind speed-plant; a "
-                         "structure measurement has the drive switched off")
+    if args.continuous and args.kind == "structure":
+        raise UsageError("--continuous: the drive's model serves --kind speed-plant and "
+                         "closed-loop; a structure measurement has the drive switched off")
+    if args.continuous and args.axis is None:
+        raise UsageError("--continuous: the drive's model serves the updating of an axis; "
+                         "give --axis AXIS too, or drop --continuous")
     if args.quantity == "speed_per_torque":
         raise UsageError("--quantity speed_per_torque is the drive's speed plant: give --kind "
                          "speed-plant")
@@ -164,10 +179,11 @@ def run(args) -> int:
         names.append(UPDATE_FIGURE)
     written = [*names, UPDATED_AXIS] if args.axis is not None else names
     subject = files[0].stem + (f"+{len(files) - 1}" if len(files) > 1 else "")
-    axis = None
+    axis = test = None
     if args.axis is not None:
         with progress.task(f"loading {args.axis}"):
             axis, contact, dof = _axis_and_contact(args)
+            test = _test_of(args, axis, contact)
     out = RunOutput.for_args(args, "identify", subject, ["results.json", *written])
     with progress.task(f"reading {len(files)} file(s)"):
         from ..measured.ema import identify_modes
@@ -186,8 +202,10 @@ def run(args) -> int:
     if axis is not None:
         from ..measured.update import update_model
 
+        if test is not None:
+            test = _checked_test(test, axis, fit.frfs[0].quantity)
         with progress.task(f"updating {axis.name} to the measurement at {dof}"):
-            update = update_model(axis.structure, fit, contact, axis.pads, dof)
+            update = update_model(axis.structure, fit, contact, axis.pads, dof, test=test)
     result = {"command": "identify", "kind": args.kind, "files": [str(f) for f in files],
               **fit.to_dict(), "folder": str(out.path),
               "figures": [str(out.file(n)) for n in names], "not_done": NOT_DONE}
@@ -196,6 +214,8 @@ def run(args) -> int:
         notes, warnings = extra.pop("notes"), extra.pop("warnings")
         result.update({"axis": str(args.axis), "updated_axis": str(out.file(UPDATED_AXIS)),
                        **extra})
+        if test is not None:
+            result["drive"] = test.drive_name
         result["warnings"] = [*result["warnings"], *warnings]
         result["notes"] = [*result["notes"], *notes]
     with progress.task(f"writing {out.path}"), out.writing() as folder:
@@ -238,13 +258,18 @@ def run(args) -> int:
 
 
 def _axis_and_contact(args):
-    """The axis, its stiction contact (the pads stuck) and the measured DOF; clear errors."""
+    """The axis (its drive as ``--continuous`` asks), its stiction contact (the pads stuck, or
+    standing under position control) and the measured DOF; clear errors."""
     from ..analysis import axis_contact
     from ..axis import load_axis
     from ..structure.model import UnknownDofError
-    from ._common import CliError, require_section
+    from ._common import CliError, axis_from_args, require_section
 
-    axis = load_axis(args.axis)
+    axis = axis_from_args(load_axis(args.axis), args)
+    if args.kind == "closed-loop":
+        require_section(axis, "drive", "[drive]", "servotune identify --kind closed-loop",
+                        ": its drive held the axis under position control during the "
+                        "measurement")
     require_section(axis, "friction", "[friction]", "servotune identify --axis",
                     ": the pads, stuck during the test, sit on its stiction contact")
     dof = args.dof or "wp.x"
@@ -255,12 +280,37 @@ def _axis_and_contact(args):
     return axis, axis_contact(axis, "stiction"), dof
 
 
+def _test_of(args, axis, contact):
+    """The closed-loop test configuration of ``--kind closed-loop`` (None for structure)."""
+    if args.kind != "closed-loop":
+        return None
+    from ..measured.closed_loop import ClosedLoopTest
+
+    return ClosedLoopTest(axis.drive, contact, axis.pads)
+
+
+def _checked_test(test, axis, quantity):
+    """The closed-loop test with the measured quantity, its model loop stable; clear errors."""
+    import dataclasses
+
+    from ._common import CliError
+
+    test = dataclasses.replace(test, quantity=quantity)
+    try:
+        test.check(axis.structure)
+    except ValueError as exc:
+        hint = ("; the drive in continuous time (--continuous) may be stable, or tune the "
+                "drive first" if test.sampled else "; tune the drive first")
+        raise CliError(f"--kind closed-loop --axis {axis.path}: {exc}{hint}") from None
+    return test
+
+
 def _print_update(update, axis, folder) -> None:
     """The updating's lines of the text output."""
     from ..units import HZ_PER_RAD_S
 
-    print(f"  updating {axis.name} to the {update.quantity} at {update.dof} (drive off, pads: "
-          f"{update.contact.note}):")
+    print(f"  updating {axis.name} to the {update.quantity} at {update.dof} "
+          f"({update.configuration}):")
     print("    identified          model before        model after     | stored mode  "
           "f [Hz] before -> after   zeta [%] before -> after   share")
     for p in update.parameters:

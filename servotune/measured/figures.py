@@ -158,10 +158,10 @@ def plot_model_update(update) -> Figure:
     ax_mag.legend(fontsize="small")
     for ax in (ax_mag, ax_ph):
         ax.grid(True, which="both", alpha=0.3)
-    return set_caption(fig, f"The measured {update.quantity} at {update.dof} (drive off, pads "
-                            f"on the {update.contact.kind} contact) against the model before "
-                            "and after updating the stored modes' frequencies and damping "
-                            "ratios; the updated poles dotted")
+    return set_caption(fig, f"The measured {update.quantity} at {update.dof} "
+                            f"({update.configuration}) against the model before and after "
+                            "updating the stored modes' frequencies and damping ratios; the "
+                            "updated poles dotted")
 
 
 def _margins_label(analysis) -> str:

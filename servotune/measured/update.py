@@ -78,6 +78,7 @@ __all__ = [
     "measured_configuration",
     "configuration_modes",
     "predicted_frf",
+    "StructureTest",
     "match_modes",
     "update_model",
     "write_updated_axis",
@@ -361,6 +362,87 @@ def predicted_frf(structure: ModalModel, omega, contact, pads, dof: str,
 
 
 @dataclass(frozen=True)
+class StructureTest:
+    """The test configuration of a ``structure`` measurement: drive off, pads on a contact.
+
+    The model side of an update: which FRF the model predicts for the measurement and which
+    complex modes it has. :func:`update_model` asks a test configuration for ``frf``,
+    ``modes``, ``check`` and ``describe``; the closed-loop one is
+    :class:`servotune.measured.closed_loop.ClosedLoopTest`.
+
+    Attributes
+    ----------
+    contact : servotune.plant.Contact
+        The guide-way contact during the test (``stiction`` for pads stuck).
+    pads : tuple of str
+        The pad DOFs.
+    quantity : str
+        ``"receptance"``, ``"mobility"`` or ``"accelerance"``.
+    """
+
+    contact: object
+    pads: tuple[str, ...]
+    quantity: str = "receptance"
+
+    kind = "structure"
+    notes = ()
+
+    def frf(self, structure: ModalModel, omega, dof: str) -> np.ndarray:
+        """Return the model's FRF of the test at a DOF (:func:`predicted_frf`).
+
+        Parameters
+        ----------
+        structure : ModalModel
+            The structure.
+        omega : array_like
+            Angular frequencies [rad/s], > 0.
+        dof : str
+            Force and response DOF.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex, SI, shape of ``omega``.
+        """
+        return predicted_frf(structure, omega, self.contact, self.pads, dof, self.quantity)
+
+    def modes(self, structure: ModalModel, dof: str) -> ConfigurationModes:
+        """Return the complex modes of the test configuration (:func:`configuration_modes`).
+
+        Parameters
+        ----------
+        structure : ModalModel
+            The stored model.
+        dof : str
+            The measured DOF.
+
+        Returns
+        -------
+        ConfigurationModes
+        """
+        return configuration_modes(structure, measured_configuration(structure, self.contact,
+                                                                     self.pads), dof)
+
+    def check(self, structure: ModalModel) -> None:
+        """Check that the model can stand for the test (a structure with a contact always can).
+
+        Parameters
+        ----------
+        structure : ModalModel
+            The structure.
+        """
+
+    def describe(self) -> str:
+        """Return the test configuration in one phrase, for reports.
+
+        Returns
+        -------
+        str
+        """
+        return f"drive off (rotor free), pads: {self.contact.note}"
+
+
+@dataclass(frozen=True)
 class ModeMatch:
     """One identified mode joined to the model (stage 2).
 
@@ -552,6 +634,13 @@ class ModelUpdate:
     message: str
     notes: tuple[str, ...] = field(default=())
     warnings: tuple[str, ...] = field(default=())
+    test: object = None
+
+    @property
+    def configuration(self) -> str:
+        """The test configuration in one phrase (the test's ``describe()``)."""
+        test = self.test or StructureTest(self.contact, self.pads, self.quantity)
+        return test.describe()
 
     @property
     def modal_damping(self) -> list[float]:
@@ -570,9 +659,9 @@ class ModelUpdate:
                 f"{len(self.parameters)} stored mode(s), each the one whose frequency moves an "
                 f"identified mode's pole most, fitted by least squares on the complex log of "
                 f"the {self.quantity} at {self.dof} (log-magnitude and phase) over the band, "
-                f"{self.bounds.describe()}; the test configuration: drive off (rotor free), "
-                f"pads on the {self.contact.kind} contact; modes matched by frequency among "
-                "those that show at the DOF (no MAC with one measured DOF)")
+                f"{self.bounds.describe()}; the test configuration: {self.configuration}; "
+                "modes matched by frequency among those that show at the DOF (no MAC with one "
+                "measured DOF)")
 
     def to_dict(self) -> dict:
         """Return the results with edge units in the names.
@@ -586,7 +675,7 @@ class ModelUpdate:
         """
         low, high = self.bounds.damping_range
         return {"dof": self.dof,
-                "configuration": f"drive off (rotor free), pads: {self.contact.note}",
+                "configuration": self.configuration,
                 "frf_error_before": self.frf_error_before,
                 "frf_error_after": self.frf_error_after,
                 "parameters": [p.to_dict() for p in self.parameters],
@@ -616,7 +705,7 @@ def _error(model: np.ndarray, measured: np.ndarray) -> float:
 
 
 def update_model(structure: ModalModel, identification, contact, pads, dof: str = "wp.x",
-                 bounds: UpdateBounds = UpdateBounds()) -> ModelUpdate:
+                 bounds: UpdateBounds = UpdateBounds(), test=None) -> ModelUpdate:
     """Update a reduced model's modes so that its FRF matches a measured one.
 
     Parameters
@@ -634,6 +723,10 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
         The measured DOF (default ``"wp.x"``).
     bounds : UpdateBounds
         Bounds of the frequencies and damping ratios.
+    test : StructureTest or servotune.measured.closed_loop.ClosedLoopTest, optional
+        The test configuration, whose ``frf`` is the model FRF fitted and whose ``modes`` are
+        matched to the identified ones (default ``StructureTest(contact, pads, quantity)``:
+        drive off, the pads on ``contact``).
 
     Returns
     -------
@@ -644,7 +737,8 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     ------
     ValueError
         No identified mode matches a mode of the model; a dynamic contact; a model without
-        modal damping ratios.
+        modal damping ratios; a model the test cannot take (``test.check``: an unstable
+        closed loop).
     UnknownDofError
         A DOF the model does not have.
 
@@ -664,12 +758,14 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     structure.index(dof)
     pads = tuple(pads)
     quantity = identification.frfs[0].quantity
+    test = StructureTest(contact, pads, quantity) if test is None else test
+    test.check(structure)
     omega = np.asarray(identification.omega, float)
     measured = np.asarray(identification.measured[0], complex)
     lines = np.abs(measured) > 0  # the log needs them; a line of exactly 0 carries nothing
-    configuration = measured_configuration(structure, contact, pads)
-    modes = configuration_modes(structure, configuration, dof)
+    modes = test.modes(structure, dof)
     matches, notes = match_modes(structure, modes, identification.modes, bounds)
+    notes = [*test.notes, *notes]
     if not matches:
         raise ValueError("no identified mode matches a mode of the model that shows at "
                          f"{dof} within the bounds ({bounds.describe()}): "
@@ -697,7 +793,7 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
         return updated_structure(structure, chosen, w0 * np.exp(x[:n]), np.exp(x[n:]))
 
     def residuals(x):
-        g = predicted_frf(model_of(x), omega[lines], contact, pads, dof, quantity)
+        g = test.frf(model_of(x), omega[lines], dof)
         r = np.log(g) - log_h
         r.imag = np.angle(np.exp(1j * r.imag))
         return np.concatenate([r.real, r.imag])
@@ -705,10 +801,14 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
     fit = least_squares(residuals, x0, bounds=(lower, upper), method="trf", x_scale=1.0,
                         xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200 * (2 * n + 1))
     updated = model_of(fit.x)
-    before = predicted_frf(structure, omega, contact, pads, dof, quantity)
-    after = predicted_frf(updated, omega, contact, pads, dof, quantity)
-    after_modes = configuration_modes(updated, measured_configuration(updated, contact, pads), dof)
+    before = test.frf(structure, omega, dof)
+    after = test.frf(updated, omega, dof)
+    after_modes = test.modes(updated, dof)
     warnings = []
+    try:
+        test.check(updated)
+    except ValueError as exc:
+        warnings.append(f"the updated model: {exc}")
     parameters = []
     for k, m in enumerate(matches):
         w_new, z_new = float(w0[k] * math.exp(fit.x[k])), float(math.exp(fit.x[n + k]))
@@ -740,7 +840,7 @@ def update_model(structure: ModalModel, identification, contact, pads, dof: str 
                      f"driving point at {dof}")
     return ModelUpdate(updated, structure, tuple(parameters), dof, contact, pads, quantity,
                        omega, measured, before, after, error_before, error_after, bounds,
-                       int(fit.nfev), str(fit.message), tuple(notes), tuple(warnings))
+                       int(fit.nfev), str(fit.message), tuple(notes), tuple(warnings), test)
 
 
 _HEADER = re.compile(r"^\s*\[\s*([^\[\]]+?)\s*\]\s*(#.*)?$")
