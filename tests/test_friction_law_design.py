@@ -264,3 +264,60 @@ def test_secant_updates_must_be_a_count():
 
     with pytest.raises(ValueError, match="secant_updates"):
         HarmonicSettings(secant_updates=-1)
+
+
+def _axis_with_law(folder: Path, law: str) -> Path:
+    """The bundled axis with [friction.gms] (the GMS set matched to the paper's) or
+    [friction.viscous] (its sigma2) in place of LuGre."""
+    import re
+    import shutil
+
+    paper = Path(__file__).resolve().parents[1] / "models" / "paper_x_axis"
+    shutil.copytree(paper, folder)
+    text = re.sub(r"variation = \{[^}]*\}[^\n]*\n(\s+#[^\n]*\n)*", "",
+                  (folder / "axis.toml").read_text())
+    text = re.sub(r"\nviscous = [^\n]*", "", text)
+    start, end = text.index("[friction.lugre]"), text.index("[drive]")
+    table = {"gms": "", "viscous": "[friction.viscous]\nc = 5578.0\n\n"}[law]
+    text = text[:start] + table + text[end:]
+    if law == "gms":
+        text = text.replace('pads = ["pad1.x"', 'gms = "bianchi2014"\npads = ["pad1.x"', 1)
+    (folder / "axis.toml").write_text(text)
+    return folder
+
+
+@pytest.mark.parametrize("law", ["gms", "viscous"])
+@pytest.mark.parametrize("command", [["compliance", "--continuous", "--no-plots"],
+                                     ["bode", "--continuous", "--no-plots"], ["modes"],
+                                     ["lobes", "--continuous", "--no-plots"]])
+def test_every_linear_command_runs_with_every_shipped_law(tmp_path, capsys, law, command):
+    import json
+
+    from servotune.cli import main
+
+    folder = _axis_with_law(tmp_path / "axis", law)
+    name, *flags = command
+    code = main([name, str(folder), *flags, "--json", "--out", str(tmp_path / "out")])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0, out
+    assert out["friction_law"] == law
+
+
+def test_harmonic_balance_of_the_viscous_law_is_the_linear_compliance(tmp_path, capsys):
+    """nlcompliance with the viscous law: the friction is linear, so the periodic response
+    is the viscous reference's compliance (a second method: the linear closed loop)."""
+    import json
+
+    from servotune.cli import main
+
+    folder = _axis_with_law(tmp_path / "axis", "viscous")
+    code = main(["nlcompliance", str(folder), "--force-pp", "268", "--harmonics", "3",
+                 "--f-start-hz", "20", "--f-end-hz", "80", "--continuous", "--no-plots",
+                 "--json", "--out", str(tmp_path / "out")])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["friction_law"] == "viscous"
+    curve, reference = out["curves"][0], out["linear_references"]["viscous"]
+    # the same peak (the reference on 901 points, the balance's peak refined)
+    assert curve["peak_compliance_m_per_n"] == pytest.approx(
+        reference["peak_compliance_m_per_n"], rel=2e-3)
+    assert curve["resonance_hz"] == pytest.approx(reference["resonance_hz"], rel=5e-3)
