@@ -51,9 +51,9 @@ UPDATE_FIGURE = "model_update.png"
 SPEED_PLANT_FIGURE = "speed_plant.png"
 UPDATED_AXIS = "updated_axis"
 KINDS = ("structure", "speed-plant", "closed-loop")
-NOT_DONE = ("a measured speed plant in place of the model's in the velocity-loop tuning "
-            "(--kind speed-plant closes the axis' loop on it but servotune tune does not tune on "
-            "it) is not in this version")
+NOT_DONE = ("physical updating parameters (port stiffnesses, masses, the pads' presliding "
+            "stiffness: --kind structure and closed-loop correct the stored modes' frequencies "
+            "and damping ratios only) and FRFs from time data (H1/H2) are not in this version")
 _FREQUENCY = number(0.0, 1e6, low_open=True, example=120, unit="Hz")
 _ORDER = number(5, 200, integer=True, example=40)
 QUANTITIES = ("receptance", "mobility", "accelerance", "speed_per_torque")
