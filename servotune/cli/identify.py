@@ -203,7 +203,9 @@ def run(args) -> int:
         from ..measured.update import update_model
 
         if test is not None:
-            test = _checked_test(test, axis, fit.frfs[0].quantity)
+            import dataclasses
+
+            test = dataclasses.replace(test, quantity=fit.frfs[0].quantity)
         with progress.task(f"updating {axis.name} to the measurement at {dof}"):
             update = update_model(axis.structure, fit, contact, axis.pads, dof, test=test)
     result = {"command": "identify", "kind": args.kind, "files": [str(f) for f in files],
@@ -281,27 +283,20 @@ def _axis_and_contact(args):
 
 
 def _test_of(args, axis, contact):
-    """The closed-loop test configuration of ``--kind closed-loop`` (None for structure)."""
+    """The closed-loop test configuration of ``--kind closed-loop``, its model loop stable
+    (None for structure); clear errors."""
     if args.kind != "closed-loop":
         return None
     from ..measured.closed_loop import ClosedLoopTest
-
-    return ClosedLoopTest(axis.drive, contact, axis.pads)
-
-
-def _checked_test(test, axis, quantity):
-    """The closed-loop test with the measured quantity, its model loop stable; clear errors."""
-    import dataclasses
-
     from ._common import CliError
 
-    test = dataclasses.replace(test, quantity=quantity)
+    test = ClosedLoopTest(axis.drive, contact, axis.pads)
     try:
         test.check(axis.structure)
     except ValueError as exc:
         hint = ("; the drive in continuous time (--continuous) may be stable, or tune the "
                 "drive first" if test.sampled else "; tune the drive first")
-        raise CliError(f"--kind closed-loop --axis {axis.path}: {exc}{hint}") from None
+        raise CliError(f"--kind closed-loop --axis {args.axis}: {exc}{hint}") from None
     return test
 
 
