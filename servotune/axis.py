@@ -82,7 +82,8 @@ __all__ = ["Axis", "AxisFormatError", "Cutting", "TuningSettings", "load_axis",
 SECTIONS = ("axis", "structure", "friction", "drive", "cutting", "operation", "requirements",
             "tuning")
 _STRUCTURE_KEYS = {"file", "mass", "stiffness", "dof_map", "modal_damping", "reduce",
-                   "coordinates", "ports", "port_tolerance", "mass_name", "stiffness_name"}
+                   "coordinates", "ports", "port_tolerance", "mass_name", "stiffness_name",
+                   "guideway_springs"}
 _REDUCE_KEYS = {"boundary", "n_modes", "f_max_hz"}
 _PORT_KEYS = {"node", "position", "direction"}
 _PORT_FIX = ('name each port by node and direction, "pad1.x" = { node = 101, direction = "x" }, '
@@ -585,6 +586,8 @@ def _read_matrices(table, folder: Path, file: Path):
                    "fix or re-export the matrix files") from None
     if ports is not None:
         matrices = _name_ports(matrices, ports, dof_map or paths["mass"], file)
+    if "guideway_springs" in table:
+        matrices = _without_guideway_springs(matrices, table["guideway_springs"], file)
     for label, matrix, limit, unit in (("mass", matrices.mass, 1e9, "kg (or kg m^2)"),
                                        ("stiffness", matrices.stiffness, 1e16,
                                         "N/m (or N m/rad)")):
@@ -593,6 +596,55 @@ def _read_matrices(table, folder: Path, file: Path):
             raise _err(file, key, f"the {label} matrix holds {top:.3g} {unit}, beyond the "
                        f"plausible {limit:g}", "check the units of the export (SI: kg, N/m)")
     return matrices
+
+
+def _without_guideway_springs(matrices, spec, file: Path):
+    """The matrices with the FE model's guide-way springs taken out (the friction model at the
+    pads takes their place): ``[structure] guideway_springs = {"<DOF>" = k}`` for a spring
+    [N/m] from a DOF to the ground, ``{"<DOF>" = {to = "<DOF>", stiffness = k}}`` for one
+    between two DOFs."""
+    import numpy as np
+    import scipy.sparse
+
+    key = "[structure] guideway_springs"
+    fix = ('give {"<DOF>" = <N/m>} for each FE spring that holds the slide on its guide ways '
+           '(to the ground), or {"<DOF>" = {to = "<DOF>", stiffness = <N/m>}} between two DOFs')
+    if not isinstance(spec, dict) or not spec:
+        raise _err(file, key, f"got {spec!r}", fix)
+    n = matrices.n
+    change = scipy.sparse.lil_array((n, n))
+    for dof, value in spec.items():
+        other, k = None, value
+        if isinstance(value, dict):
+            if set(value) != {"to", "stiffness"} or not isinstance(value["to"], str):
+                raise _err(file, f"{key}.{dof}", f"got {value!r}", fix)
+            other, k = value["to"], value["stiffness"]
+        if isinstance(k, bool) or not isinstance(k, (int, float)) or not (
+                math.isfinite(k) and 0 < k <= 1e16):
+            raise _err(file, f"{key}.{dof}", f"got {k!r}", "give the spring's stiffness in N/m "
+                       "(a number > 0)")
+        try:
+            rows = matrices.index([dof] if other is None else [dof, other])
+        except UnknownDofError as exc:
+            raise _err(file, f"{key}.{dof}", str(exc), "use names of the DOF map or of "
+                       "[structure] ports") from None
+        vec = np.zeros(n)
+        vec[rows[0]] = 1.0
+        if other is not None:
+            vec[rows[1]] -= 1.0
+        nz = np.flatnonzero(vec)
+        for i in nz:
+            for j in nz:
+                change[i, j] += k * vec[i] * vec[j]
+    stiffness = (matrices.stiffness - change.tocsr()).tocsr()
+    for dof in spec:
+        i = int(matrices.index([dof])[0])
+        if stiffness[i, i] < -1e-9 * abs(matrices.stiffness[i, i]):
+            raise _err(file, f"{key}.{dof}", f"{spec[dof]!r} is more than the stiffness the "
+                       f"model has at {dof} ({matrices.stiffness[i, i]:.4g} N/m on its "
+                       "diagonal)", "give the FE spring's own stiffness (check the units: N/m)")
+    return dataclasses.replace(matrices, stiffness=stiffness,
+                               source=f"{matrices.source} without its guide-way springs")
 
 
 def _ports(table, folder: Path, file: Path):

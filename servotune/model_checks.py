@@ -311,10 +311,17 @@ class AxisModelChecks:
     source: str = ""
     ports: tuple[tuple[str, str], ...] = ()
     """(DOF name, where the export has it) of the ports of ``[structure.ports]``."""
+    grounded: str = ""
+    """Why the slide cannot travel along its pads (the structure holds them to the ground,
+    e.g. by the FE model's guide-way springs), with where and the fix; "" when it can."""
 
     @property
     def errors(self) -> tuple[str, ...]:
-        """One line per failed check that makes the axis unusable (the transmission)."""
+        """One line per failed check that makes the axis unusable (a grounded slide, the
+        transmission; the transmission is not judged on a grounded slide)."""
+        if self.grounded:
+            return (f"model check (a slide held to the ground; [structure] against [friction] "
+                    f"pads): {self.grounded}",)
         t = self.transmission
         if t is None or t.passed:
             return ()
@@ -357,7 +364,7 @@ class AxisModelChecks:
         """
         return {"transmission": None if self.transmission is None
                 else self.transmission.to_dict(),
-                "band_coverage": self.coverage.to_dict(),
+                "band_coverage": self.coverage.to_dict(), "grounded": self.grounded or None,
                 "errors": list(self.errors), "warnings": list(self.warnings)}
 
 
@@ -406,11 +413,20 @@ def axis_model_checks(axis: Axis, tolerance: float = TRANSMISSION_TOLERANCE,
     >>> "reverse" in checks.errors[0] and "not the gains" in checks.errors[0]
     True
     """
-    transmission = None
-    if axis.drive is not None:
+    transmission, grounded = None, ""
+    if axis.drive is not None and axis.friction is not None:
+        from .thrust import moving_mass
+
+        try:
+            moving_mass(axis.structure, axis.pads)
+        except ValueError as exc:
+            if "no rigid-body travel" in str(exc):
+                grounded = str(exc)
+    if axis.drive is not None and not grounded:
         transmission = transmission_check(axis.structure, axis.drive, tolerance)
     coverage = band_coverage(axis.structure, axis.requirements, margin)
-    return AxisModelChecks(transmission, coverage, str(axis.file), _port_places(axis))
+    return AxisModelChecks(transmission, coverage, str(axis.file), _port_places(axis),
+                           grounded)
 
 
 def _port_places(axis) -> tuple[tuple[str, str], ...]:

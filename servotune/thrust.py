@@ -65,8 +65,8 @@ from .friction.lugre import LuGreParameters
 from .regimes import Operation
 from .structure.model import ModalModel
 
-__all__ = ["ThrustCase", "ThrustBudget", "CRealisation", "moving_mass", "thrust_budget",
-           "c_realisations"]
+__all__ = ["ThrustCase", "ThrustBudget", "CRealisation", "moving_mass", "holding_forces",
+           "thrust_budget", "c_realisations"]
 
 
 def moving_mass(structure: ModalModel, pads, drive: Drive | None = None) -> float:
@@ -112,14 +112,67 @@ def moving_mass(structure: ModalModel, pads, drive: Drive | None = None) -> floa
     rigid = vec[:, np.abs(lam) <= 1e-9 * scale]
     idx = structure.index(list(pads))
     if rigid.shape[1] == 0:
-        raise ValueError("the structure has no rigid-body travel (it is grounded): the moving "
-                         "mass of the axis cannot be found; leave the pads free in the model")
+        held = holding_forces(structure, pads)
+        where = ", ".join(f"{d} {f:.3g} N" for d, f in held[:4])
+        raise ValueError(
+            "the structure has no rigid-body travel (it is grounded): moving the pads together "
+            f"by 1 m takes at least {math.hypot(*(f for _, f in held)) if held else 0.0:.3g} N "
+            f"of holding forces ({where}{' ...' if len(held) > 4 else ''}), so the moving mass "
+            "of the axis cannot be found and a drive cannot move it; if these are the FE "
+            "model's guide-way springs, name them in axis.toml, [structure] guideway_springs = "
+            "{\"<DOF>\" = <N/m>} (the friction model at the pads takes their place); else leave "
+            "the pads free in the model")
     rows = rigid[idx]  # pad displacements of each rigid mode
     coeff, *_ = np.linalg.lstsq(rows, np.ones(len(idx)), rcond=None)
     phi = rigid @ coeff
     if np.abs(rows @ coeff - 1.0).max() > 1e-6:
         raise ValueError("no rigid-body motion moves all pads together; check the pad DOFs")
     return float(phi @ m @ phi)
+
+
+def holding_forces(structure: ModalModel, pads) -> list[tuple[str, float]]:
+    """Return the forces that hold a structure when its pads move together by 1 m and every
+    other DOF is left in equilibrium, by DOF, largest first.
+
+    ``r`` with ``r[pads] = 1`` and ``K_ff r_f = -K_fp 1`` at the other DOFs (least squares
+    where the structure is free there); ``f = K r`` is then the stiffness with which the
+    structure holds its pads against a common travel: 0 for a slide free along its guide ways,
+    the guide-way springs' stiffness to the ground for an FE export that keeps them.
+
+    Parameters
+    ----------
+    structure : ModalModel
+        The structure.
+    pads : sequence of str
+        The pad DOFs.
+
+    Returns
+    -------
+    list of (str, float)
+        (DOF, force [N]) for the forces above 1e-6 of the largest, largest first.
+
+    Examples
+    --------
+    A slide held by a 1e7 N/m spring to the ground at its pad:
+
+    >>> s = ModalModel([[100.0, 0.0], [0.0, 50.0]], [[1.1e7, -1e6], [-1e6, 1e6]],
+    ...                ["pad1.x", "wp.x"])
+    >>> [(d, round(f)) for d, f in holding_forces(s, ["pad1.x"])]
+    [('pad1.x', 10000000)]
+    """
+    k = np.asarray(structure.stiffness, dtype=float)
+    idx = structure.index(list(pads))
+    free = np.setdiff1d(np.arange(k.shape[0]), idx)
+    r = np.zeros(k.shape[0])
+    r[idx] = 1.0
+    if free.size:
+        sol, *_ = np.linalg.lstsq(k[np.ix_(free, free)], -k[np.ix_(free, idx)].sum(axis=1),
+                                  rcond=None)
+        r[free] = sol
+    f = k @ r
+    top = float(np.abs(f).max()) if f.size else 0.0
+    order = np.argsort(-np.abs(f))
+    return [(structure.dofs[i], float(f[i])) for i in order if abs(f[i]) > 1e-6 * top > 0]
 
 
 @dataclass(frozen=True)

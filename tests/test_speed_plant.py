@@ -224,8 +224,8 @@ def test_the_command_writes_its_figure_and_text(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["--kind", "closed-loop"], "--kind closed-loop: a measured closed-loop work-piece "
-                                "compliance (--kind closed-loop) is not in this version"),
+    (["--kind", "closed-loop"], "is a speed per torque, the drive's speed plant: give --kind "
+                                "speed-plant"),
     (["--kind", "speed-plant"], "give --axis AXIS"),
     (["--kind", "speed-plant", "--axis", str(MODELS / "weak_motor_axis"), "--dof", "wp.x"],
      "--dof: not with --kind speed-plant"),
