@@ -100,7 +100,7 @@ BAD = [
     (lambda t: t.replace("resistance = 0.4", 'resistance = "0.4 ohm"'),
      r"\[drive.motor\] resistance.*number in ohm"),
     (lambda t: t.replace("kp = 3.7 ", "kp_nm = 3.7 "),
-     r"\[velocity_loop\]: unknown keys \['kp_nm'\]"),
+     r"\[drive\.velocity_loop\]: unknown keys \['kp_nm'\]"),
     (lambda t: t.replace("kv_m_per_min_per_mm = 1.0           # the",
                          "kv_m_per_min_per_mm = 1.0\nkv = 16.7 # the"), "exactly one of kv"),
     (lambda t: t.replace("radial_immersion = 0.5", "radial_immersion = 50.0"),

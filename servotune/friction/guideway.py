@@ -80,33 +80,6 @@ class GuideWayFriction:
                              f"{self.viscous!r}")
         object.__setattr__(self, "viscous", viscous)
 
-    def require_lugre(self, what: str) -> LuGreParameters:
-        """Return the LuGre parameters, or refuse a law without them clearly.
-
-        Parameters
-        ----------
-        what : str
-            The job that needs them (e.g. ``"servotune tune"``).
-
-        Returns
-        -------
-        LuGreParameters
-
-        Raises
-        ------
-        ValueError
-            The axis' law has no LuGre parameters; the message names the law, the job and
-            what works with that law.
-        """
-        if self.lugre is None:
-            raise ValueError(
-                f"{what} needs the guide ways' LuGre parameters (its regime models, thrust "
-                f"budget and references take the presliding and sliding LuGre contact), but "
-                f"the axis' friction law is {self.law.name!r}; with that law the time "
-                "simulation, modes, bode and compliance work (describe the guide ways with "
-                "[friction.lugre] to tune them)")
-        return self.lugre
-
     @property
     def per_pad(self) -> LuGreParameters:
         """One pad's share of the LuGre parameters (a LuGre law only)."""

@@ -71,28 +71,6 @@ class AxisSetup:
         object.__setattr__(self, "law", law)
         object.__setattr__(self, "lugre", lugre)
 
-    def require_lugre(self, what: str) -> LuGreParameters:
-        """Return the LuGre parameters, or refuse another law naming the job.
-
-        Parameters
-        ----------
-        what : str
-            The job that needs them (e.g. ``"the paper's Table 3"``).
-
-        Returns
-        -------
-        LuGreParameters
-
-        Raises
-        ------
-        ValueError
-            The law is not LuGre.
-        """
-        if self.lugre is None:
-            raise ValueError(f"{what} needs LuGre friction; the axis' friction law is "
-                             f"{self.law.name!r}")
-        return self.lugre
-
 
 def axis_setup(axis) -> AxisSetup:
     """Return the structure, drive, pads, friction law and viscous-only damping of an axis.
