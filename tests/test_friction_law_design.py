@@ -321,3 +321,11 @@ def test_harmonic_balance_of_the_viscous_law_is_the_linear_compliance(tmp_path, 
     assert curve["peak_compliance_m_per_n"] == pytest.approx(
         reference["peak_compliance_m_per_n"], rel=2e-3)
     assert curve["resonance_hz"] == pytest.approx(reference["resonance_hz"], rel=5e-3)
+
+
+def test_a_law_without_a_steady_friction_says_what_it_lacks():
+    class Bare(FrictionLaw):
+        """A law with neither steady_force nor periodic_force (not registered: no name)."""
+
+    with pytest.raises(ValueError, match="neither steady_force nor periodic_force"):
+        Bare().steady_force(0.01)

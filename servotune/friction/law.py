@@ -200,12 +200,18 @@ class FrictionLaw:
         Raises
         ------
         ValueError
-            If ``speed`` is zero or not finite.
+            If ``speed`` is zero or not finite, or the law has no :meth:`periodic_force` to
+            take it from.
         """
         speed = _sliding_speed(speed)
         velocity = np.full(64, speed)
-        # a travel of 1 m per period: far beyond any presliding range, so the states settle
-        force = self.periodic_force(velocity, 1.0 / abs(speed))
+        try:
+            # a travel of 1 m per period: far beyond any presliding range, so the states settle
+            force = self.periodic_force(velocity, 1.0 / abs(speed))
+        except NotImplementedError:
+            raise ValueError(f"the {self.name!r} friction law gives neither steady_force nor "
+                             "periodic_force: the thrust budget and the feeding regimes need "
+                             "one of them (implement it in the law)") from None
         return float(np.mean(force))
 
     def steady_slope(self, speed: float) -> float:
