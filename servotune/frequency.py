@@ -733,6 +733,11 @@ def peak(omega, response) -> tuple[float, float]:
     return float(mag[i]), float(omega[i])
 
 
+#: Below this largest closed-loop gain |L/(1+L)| over the grid a loop does nothing
+#: (:attr:`LoopAnalysis.inert`): a working loop follows its set-point, |T| -> 1.
+INERT_GAIN = 0.1
+
+
 @dataclass(frozen=True)
 class LoopAnalysis:
     """Robustness of one loop from its loop transfer function L (SI; Hz/deg/dB at the edges).
@@ -777,6 +782,14 @@ class LoopAnalysis:
     ms_frequency: float
     bandwidth: float
     gain_margin_lower: float = 0.0
+    closed_loop_gain_max: float = math.nan
+
+    @property
+    def inert(self) -> bool:
+        """Whether the loop does nothing: its closed-loop gain |L/(1+L)| stays below
+        :data:`INERT_GAIN` over the grid (the actuator does not move what the loop measures).
+        Its margins and Ms then describe no working loop, and it has no bandwidth (nan)."""
+        return bool(self.closed_loop_gain_max < INERT_GAIN)
 
     @property
     def gain_margin_db(self) -> float:
@@ -823,6 +836,14 @@ class LoopAnalysis:
             "ms": self.ms,
             "ms_frequency_hz": self.ms_frequency * HZ_PER_RAD_S,
             "bandwidth_hz": self.bandwidth_hz,
+            "closed_loop_gain_max": (self.closed_loop_gain_max
+                                     if math.isfinite(self.closed_loop_gain_max) else None),
+            "inert": self.inert,
+            **({"note": f"the loop does nothing: its closed-loop gain |L/(1+L)| stays below "
+                        f"{self.closed_loop_gain_max:.3g} (the actuator does not move what the "
+                        "loop measures: a structure held to the ground, a transmission of almost "
+                        "nothing); its margins and Ms describe no working loop"}
+               if self.inert else {}),
         }
 
 
@@ -943,8 +964,11 @@ def analyse_response(omega, l_jw, l_low: complex) -> LoopAnalysis:
         elif m_at >= 1.0:
             gm_lower = max(gm_lower, 1.0 / m_at)
     t0 = abs(l_low / (1.0 + l_low))
+    t_max = float(t.max())
     below = np.nonzero(t < t0 / math.sqrt(2.0))[0]
-    if below.size and below[0] > 0:
+    if t_max < INERT_GAIN:
+        bw = math.nan          # a loop that does nothing has no bandwidth
+    elif below.size and below[0] > 0:
         i = below[0]
         f = (math.log(t0 / math.sqrt(2.0)) - math.log(t[i - 1])) / (
             math.log(t[i]) - math.log(t[i - 1]))
@@ -952,7 +976,8 @@ def analyse_response(omega, l_jw, l_low: complex) -> LoopAnalysis:
     else:
         bw = float(omega[below[0]]) if below.size else math.inf
     return LoopAnalysis(gain_margin=gm, phase_margin=pm, crossover=wc, phase_crossover=wpc,
-                        ms=ms, ms_frequency=w_ms, bandwidth=bw, gain_margin_lower=gm_lower)
+                        ms=ms, ms_frequency=w_ms, bandwidth=bw, gain_margin_lower=gm_lower,
+                        closed_loop_gain_max=t_max)
 
 
 @dataclass(frozen=True)

@@ -72,3 +72,22 @@ def test_a_spring_beyond_the_model_s_stiffness_or_an_unknown_dof_is_refused(tmp_
         load_axis(grounded(tmp_path / "b", named=True, springs={"pad9.x": 1e8}))
     with pytest.raises(AxisFormatError, match=r"guideway_springs\.pad1\.x.*N/m"):
         load_axis(grounded(tmp_path / "c", named=True, springs={"pad1.x": -1.0}))
+
+
+def test_a_loop_that_does_nothing_is_named_so_and_has_no_bandwidth():
+    """A velocity loop whose actuator barely moves what it measures (|L| <= 6e-5 as a
+    grounded export gives): its closed-loop gain stays about |L|, it is inert, its
+    bandwidth is not a number and its JSON says why; a working loop is not."""
+    from servotune.frequency import analyse_response
+
+    w = np.geomspace(1.0, 1e4, 2000)
+    weak = 6e-5 * (1 + 10 / (1j * w)) / (1 + 1j * w / 100)       # a PI on a held structure
+    a = analyse_response(w, weak, weak[0])
+    assert a.inert and np.isnan(a.bandwidth)
+    assert a.closed_loop_gain_max == pytest.approx(np.abs(weak / (1 + weak)).max())
+    assert a.closed_loop_gain_max < 1e-3
+    d = a.to_dict()
+    assert d["inert"] and "does nothing" in d["note"]
+    working = analyse_response(w, 100.0 / (1j * w), 100.0 / (1j * 0.01))
+    assert not working.inert and working.bandwidth == pytest.approx(100.0, rel=1e-2)
+    assert "note" not in working.to_dict()

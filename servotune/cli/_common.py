@@ -677,7 +677,7 @@ _REASONS = {
     "phase_crossover_hz": "no phase crossover: the phase never reaches -180 deg",
     "gain_margin_lower_db": "no lower gain margin: the loop tolerates any gain reduction",
     "bandwidth_hz": "the closed loop does not fall 3 dB below its static gain in the "
-                    "frequency range",
+                    "frequency range, or the loop does nothing (see inert and note)",
     "margin": "no chatter limit in the depths examined",
 }
 

@@ -115,6 +115,10 @@ def run(args) -> int:
             print(f"  {name} loop: Ms {a['ms']:.2f} is the largest sensitivity at the grid's "
                   f"{side} edge {a['ms_frequency_hz']:.4g} Hz, not a peak found inside "
                   f"{lo:.4g}-{hi:.4g} Hz: the sensitivity still rises there")
+    for name in ("velocity", "position"):
+        a = out[f"{name}_loop"]
+        if a.get("inert"):
+            print(f"  WARNING: {name} loop: {a['note']}")
     for line in checks.warnings:
         print(f"  WARNING: {line}")
     print(f"  wrote {run.path}")
