@@ -1489,11 +1489,9 @@ def _finish(axis: Axis, result: TuningResult, simulate: bool, executor, progress
                               "frequency_hz": freq * HZ_PER_RAD_S,
                               "feed_force_n": axis.operation.feed_force}
         law = axis.friction.law
-        stiffness = law.presliding()[0]
         out["c_realisation"] = c_realisations(problem.thrust, result.design.c,
                                               law.viscous_part, amp, freq,
-                                              stiffness if stiffness > 0 else None,
-                                              axis.operation)
+                                              law.presliding()[0], axis.operation)
     if (axis.drive is not None and not result.before.stable
             and not axis.drive.digital.is_continuous and given is None):
         moving = problem.moving_models

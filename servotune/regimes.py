@@ -325,8 +325,8 @@ class RegimeModel:
         -------
         Contact
             ``Contact.viscous(c)``; presliding ``Contact.stiction(k, d, c)`` with the law's
-            presliding spring and damper without its viscous part (a law without a presliding
-            spring: ``Contact.viscous(d + c)``); describing function a sliding contact
+            presliding spring and damper without its viscous part (k = 0 for a law without a
+            presliding spring: a damper alone); describing function a sliding contact
             ``F = Keq x + (Ceq + c) v``; sliding the law's sliding linearisation with the
             viscous part c at the model's speed.
         """
@@ -335,7 +335,7 @@ class RegimeModel:
             return Contact.viscous(c)
         if self.kind == "presliding":
             k, d = self.friction.with_viscous(0.0).presliding()
-            return Contact.stiction(k, d, c) if k > 0 else Contact.viscous(d + c)
+            return Contact.stiction(k, d, c)
         if self.kind == "describing":
             keq, ceq = self._keq_ceq
             element = control.ss([[0.0]], [[1.0]], [[keq]], [[ceq + c]])
@@ -820,7 +820,7 @@ def process_amplitude(axis, drive, c: float, force_pp: float,
     omega = 2 * math.pi * np.geomspace(*(np.array(axis.requirements.band) / (2 * math.pi)),
                                        3000)
     k, d = law.with_viscous(0.0).presliding()
-    contact = Contact.stiction(k, d, c) if k > 0 else Contact.viscous(d + c)
+    contact = Contact.stiction(k, d, c)
     h = axis_compliance(axis.structure, omega, drive, contact, axis.pads,
                         outputs=("wp.x", *axis.pads))
     i = int(np.argmax(np.abs(h[0])))

@@ -16,7 +16,43 @@ from dataclasses import dataclass
 from .law import FrictionLaw, friction_law, friction_law_names
 from .lugre import LuGreParameters
 
-__all__ = ["GuideWayFriction"]
+__all__ = ["GuideWayFriction", "law_and_lugre"]
+
+
+def law_and_lugre(law, lugre, owner: str):
+    """Return ``(law, lugre)`` from a friction law or LuGre parameters, whichever is given.
+
+    Parameters
+    ----------
+    law : FrictionLaw or None
+        The friction law.
+    lugre : LuGreParameters or None
+        LuGre parameters (the law is then the LuGre law of them).
+    owner : str
+        The class asking, for messages.
+
+    Returns
+    -------
+    (FrictionLaw, LuGreParameters or None)
+        The law, and its LuGre parameters when it is LuGre.
+
+    Raises
+    ------
+    ValueError
+        Neither given, both given and different, or a law that is not a FrictionLaw.
+    """
+    if law is None:
+        if not isinstance(lugre, LuGreParameters):
+            raise ValueError(f"{owner} needs a friction law (law=...) or LuGre parameters "
+                             "(lugre=LuGreParameters(...))")
+        law = friction_law("lugre")(lugre)
+    elif not isinstance(law, FrictionLaw):
+        raise ValueError(f"{owner}.law must be a FrictionLaw (one of {friction_law_names()}), "
+                         f"got {law!r}")
+    own = getattr(law, "lugre_parameters", None)
+    if lugre is not None and own != lugre:
+        raise ValueError(f"{owner}: give the friction law or the LuGre parameters, not both")
+    return law, own
 
 
 @dataclass(frozen=True)
@@ -59,19 +95,7 @@ class GuideWayFriction:
         if not pads or len(set(pads)) != len(pads):
             raise ValueError(f"GuideWayFriction.pads must be distinct DOF names, got {pads!r}")
         object.__setattr__(self, "pads", pads)
-        law = self.law
-        if law is None:
-            if not isinstance(self.lugre, LuGreParameters):
-                raise ValueError("GuideWayFriction needs a friction law (law=...) or LuGre "
-                                 "parameters (lugre=LuGreParameters(...))")
-            law = friction_law("lugre")(self.lugre)
-        elif not isinstance(law, FrictionLaw):
-            raise ValueError(f"GuideWayFriction.law must be a FrictionLaw (one of "
-                             f"{friction_law_names()}), got {law!r}")
-        lugre = getattr(law, "lugre_parameters", None)
-        if self.lugre is not None and lugre != self.lugre:
-            raise ValueError("GuideWayFriction: give the friction law or the LuGre parameters, "
-                             "not both")
+        law, lugre = law_and_lugre(self.law, self.lugre, "GuideWayFriction")
         object.__setattr__(self, "law", law)
         object.__setattr__(self, "lugre", lugre)
         viscous = law.viscous_part if self.viscous is None else float(self.viscous)

@@ -346,12 +346,6 @@ def presliding_guess(balance: PadBalance, omega: float, params) -> np.ndarray:
     return balance.real_of(h)
 
 
-def _presliding_contact(law) -> Contact:
-    """The law's presliding contact (a law without a spring: its damper alone)."""
-    k, d = law.presliding()
-    return Contact.stiction(k, d, 0.0) if k > 0 else Contact.viscous(d)
-
-
 def require_stable_regime(setup, speed: float = 0.0) -> None:
     """Refuse an axis whose linearised closed loop is unstable in the regime.
 
@@ -380,7 +374,7 @@ def require_stable_regime(setup, speed: float = 0.0) -> None:
         what = (f"closed loop feeding at {speed * 1e3:g} mm/s ({law.name} linearised about "
                 f"sliding)")
     else:
-        contact = _presliding_contact(law)
+        contact = Contact.stiction(*law.presliding(), 0.0)
         what = f"closed loop at rest ({law.name} presliding contact)"
     # a digital drive is checked as the sampled-data loop it is (the balance models it so)
     closed_loop(setup.structure, setup.drive, contact, setup.pads).require_stable(what)
@@ -476,7 +470,7 @@ def nonlinear_compliance(setup, forces_pp, speed: float = 0.0, band=DEFAULT_BAND
     refs = {}
     if references:
         omega = np.linspace(band[0], band[1], 901)
-        models = {"presliding": _presliding_contact(setup.law),
+        models = {"presliding": Contact.stiction(*setup.law.presliding(), 0.0),
                   "viscous": Contact.viscous(setup.viscous)}
         if speed > 0.0:
             models["sliding"] = Contact.sliding(setup.law.sliding_system(speed), speed)

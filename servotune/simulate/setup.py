@@ -13,6 +13,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from ..drive import Drive
+from ..friction.guideway import law_and_lugre
 from ..friction.law import FrictionLaw
 from ..friction.lugre import LuGreParameters
 from ..structure.model import ModalModel
@@ -56,18 +57,7 @@ class AxisSetup:
     law: FrictionLaw | None = None
 
     def __post_init__(self) -> None:
-        law = self.law
-        if law is None:
-            if not isinstance(self.lugre, LuGreParameters):
-                raise ValueError("AxisSetup needs a friction law (law=...) or LuGre parameters")
-            from ..friction.laws.lugre import LuGreFriction
-
-            law = LuGreFriction(self.lugre)
-        elif not isinstance(law, FrictionLaw):
-            raise ValueError(f"AxisSetup.law must be a FrictionLaw, got {law!r}")
-        lugre = getattr(law, "lugre_parameters", None)
-        if self.lugre is not None and lugre != self.lugre:
-            raise ValueError("AxisSetup: give the friction law or the LuGre parameters, not both")
+        law, lugre = law_and_lugre(self.law, self.lugre, "AxisSetup")
         object.__setattr__(self, "law", law)
         object.__setattr__(self, "lugre", lugre)
 

@@ -205,8 +205,7 @@ def linear_references(setup: AxisSetup, settings: SweepSettings) -> dict:
     k, d = setup.law.presliding()
     out = {}
     for key, contact in (("locked", Contact.locked()),
-                         ("presliding", Contact.stiction(k, d, 0.0) if k > 0
-                          else Contact.viscous(d)),
+                         ("presliding", Contact.stiction(k, d, 0.0)),
                          ("viscous", Contact.viscous(setup.viscous))):
         h = axis_compliance(setup.structure, omega, setup.drive, contact, setup.pads)[0]
         mag, w = peak(omega, h)

@@ -138,8 +138,7 @@ def verify_design(setup: AxisSetup, forces=DEFAULT_FORCES, f_start_hz: float = 1
 
     k, d = setup.law.presliding()
     linear = {"locked": predict(Contact.locked()),
-              "presliding": predict(Contact.stiction(k, d, 0.0) if k > 0
-                                    else Contact.viscous(d)),
+              "presliding": predict(Contact.stiction(k, d, 0.0)),
               "viscous": predict(Contact.viscous(setup.viscous))}
     axis = NonlinearAxis(setup.structure, setup.drive, setup.pads, setup.law)
     jobs = [(axis, float(f), f_start_hz, f_end_hz, duration) for f in forces]
