@@ -33,8 +33,11 @@ columns); ``ports`` gives the few DOFs the analyses need their names (``pad1.x``
     [structure.ports]
     "pad1.x" = { node = 101, direction = "x" }        # x/y/z/rx/ry/rz, or UX, ROTX, 1-6
     "wp.x" = { position = [0.0, 0.0, 0.8], direction = "UX" }
+    "encoder.x" = { node = 120, direction = "-UX" }   # minus: the port is -UX of the export
 
-(or ``ports = "ports.csv"``, a file ``port,node,direction`` or ``port,x,y,z,direction``).
+(or ``ports = "ports.csv"``, a file ``port,node,direction`` or ``port,x,y,z,direction``). A
+direction with a minus sign is for a DOF of the export that points against the axis: its row
+and column of M and K are multiplied by -1 on loading.
 
 Every error names the file, the field and what to do about it.
 """
@@ -72,7 +75,7 @@ from .regimes import SPREAD_PARAMETERS, FrictionSpread, Operation, friction_spre
 from .requirements import Requirements
 from .structure.io import MatrixFileError, read_coordinates, read_structure
 from .structure.model import ModalModel, UnknownDofError
-from .structure.ports import Port, PortError, name_ports, read_ports
+from .structure.ports import Port, PortError, apply_signs, name_ports, port_signs, read_ports
 from .structure.reduction import craig_bampton
 from .validation import finite, fraction, positive
 
@@ -88,7 +91,8 @@ _REDUCE_KEYS = {"boundary", "n_modes", "f_max_hz"}
 _PORT_KEYS = {"node", "position", "direction"}
 _PORT_FIX = ('name each port by node and direction, "pad1.x" = { node = 101, direction = "x" }, '
              'or by position [m], { position = [x, y, z], direction = "x" } with coordinates = '
-             '"nodes.csv" (directions x, y, z, rx, ry, rz, or UX ... ROTZ, or 1-6)')
+             '"nodes.csv" (directions x, y, z, rx, ry, rz, or UX ... ROTZ, or 1-6; a leading - '
+             'where the port points against the export\'s direction, direction = "-UX")')
 
 
 class AxisFormatError(ValueError):
@@ -732,17 +736,19 @@ def _port(name, spec, file: Path) -> Port:
 
 
 def _name_ports(matrices, ports, source: Path, file: Path):
-    """The matrices with the ports' rows renamed (:func:`~servotune.structure.name_ports`)."""
-    import dataclasses
-
+    """The matrices with the ports' rows renamed (:func:`~servotune.structure.name_ports`) and
+    the rows and columns of ports with a minus sign (``direction = "-UX"``) multiplied by -1
+    (:func:`~servotune.structure.port_signs`, :func:`~servotune.structure.apply_signs`)."""
     ports, coordinates, tolerance = ports
     try:
+        signs = port_signs(matrices.dofs, ports, coordinates, tolerance)
         dofs = name_ports(matrices.dofs, ports, coordinates, tolerance)
     except PortError as exc:
         raise _err(file, "[structure] ports", str(exc),
                    f"ports name rows of the DOF map {source} (<node>.<direction>) by node "
                    "number or position and direction") from None
-    return dataclasses.replace(matrices, dofs=dofs)
+    return dataclasses.replace(matrices, mass=apply_signs(matrices.mass, signs),
+                               stiffness=apply_signs(matrices.stiffness, signs), dofs=dofs)
 
 
 def _largest(matrix) -> float:

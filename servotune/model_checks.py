@@ -30,6 +30,7 @@ determined).
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -41,7 +42,7 @@ from .drive import Drive
 from .requirements import Requirements
 from .structure.coverage import DEFAULT_MARGIN, BandCoverage, mode_coverage
 from .structure.model import ModalModel
-from .structure.ports import normalise_direction
+from .structure.ports import signed_direction
 
 if TYPE_CHECKING:
     from .axis import Axis
@@ -236,14 +237,17 @@ def transmission_check(structure: ModalModel, drive: Drive,
         else:
             flipped = None
             which = f"the direction of {encoder} or of {rotor} is flipped"
+        example = "-ROTX" if flipped == rotor else "-UX"
         return TransmissionCheck(
             **common, status="flipped", flipped=flipped, passed=False,
             message=f"the structure moves the encoder {encoder} by {structure_ratio:.4g} m "
                     f"{per}, but the drive's ratio is +{ratio:.4g} m/rad: {which}. With linear "
                     "feedback the position loop would be positive feedback (unstable at any "
-                    f"gain). Fix: reverse {flipped or 'that DOF'} in the export (multiply its "
-                    "row and column of M and K by -1; a DOF map names DOFs, it carries no "
-                    "sign), not the gains")
+                    f"gain). Fix: reverse {flipped or 'that DOF'}, not the gains: give its "
+                    "port's direction a minus sign in axis.toml, [structure.ports] "
+                    f'"{flipped or "<port>"}" = {{ node = <node>, direction = "{example}" }} '
+                    "(-x, -UX, -ROTX or Nastran's -1 ... as the export spells the direction; "
+                    "the same in a ports CSV), or reverse the DOF in the export")
     if abs(relative) > tolerance:
         return TransmissionCheck(
             **common, status="mismatch", flipped=None, passed=False,
@@ -314,6 +318,9 @@ class AxisModelChecks:
     grounded: str = ""
     """Why the slide cannot travel along its pads (the structure holds them to the ground,
     e.g. by the FE model's guide-way springs), with where and the fix; "" when it can."""
+    port_fixes: tuple[tuple[str, str], ...] = ()
+    """(DOF name, its line of ``[structure.ports]`` with the direction reversed) of the ports
+    of ``[structure.ports]``: the fix of a flipped DOF, as axis.toml writes it."""
 
     @property
     def errors(self) -> tuple[str, ...]:
@@ -329,6 +336,8 @@ class AxisModelChecks:
                 "undetermined": "the encoder does not follow the motor"}.get(t.status, t.status)
         where = dict(self.ports).get(t.flipped) if t.flipped else None
         port = f" ({t.flipped} is {where} of the export)" if where else ""
+        fix = dict(self.port_fixes).get(t.flipped) if t.flipped else None
+        port += f"; in axis.toml write {fix}" if fix else ""
         return (f"model check ({what}; [structure] against [drive]): {t.message}{port}",)
 
     @property
@@ -426,7 +435,7 @@ def axis_model_checks(axis: Axis, tolerance: float = TRANSMISSION_TOLERANCE,
         transmission = transmission_check(axis.structure, axis.drive, tolerance)
     coverage = band_coverage(axis.structure, axis.requirements, margin)
     return AxisModelChecks(transmission, coverage, str(axis.file), _port_places(axis),
-                           grounded)
+                           grounded, _port_fixes(axis))
 
 
 def _port_places(axis) -> tuple[tuple[str, str], ...]:
@@ -440,11 +449,35 @@ def _port_places(axis) -> tuple[tuple[str, str], ...]:
         if not hasattr(spec, "get"):
             continue
         direction = spec.get("direction")
-        direction = normalise_direction(direction) or direction
+        signed = signed_direction(direction)
+        if signed is not None:
+            direction = ("-" if signed[0] < 0 else "") + signed[1]
         if spec.get("node") is not None:
             place = f"node {spec['node']}, direction {direction},"
         else:
             place = (f"direction {direction} at the node nearest "
                      f"{list(spec.get('position') or ())} m")
         out.append((str(name), place))
+    return tuple(out)
+
+
+def _port_fixes(axis) -> tuple[tuple[str, str], ...]:
+    """Each port of ``[structure.ports]`` with its direction reversed, as a line of axis.toml
+    (``"encoder.x" = { node = 120, direction = "-UX" }``), for the fix of a flipped DOF."""
+    ports = axis.tables.get("structure", {}).get("ports")
+    if not hasattr(ports, "items"):
+        return ()
+    out = []
+    for name, spec in ports.items():
+        if not hasattr(spec, "get") or signed_direction(spec.get("direction")) is None:
+            continue
+        text = str(spec["direction"]).strip()
+        reversed_ = text[1:] if text[0] == "-" else "-" + text.removeprefix("+")
+        if spec.get("node") is not None:
+            where = f"node = {json.dumps(spec['node'])}"
+        elif spec.get("position") is not None:
+            where = f"position = {json.dumps(list(spec['position']))}"
+        else:
+            continue
+        out.append((str(name), f'"{name}" = {{ {where}, direction = "{reversed_}" }}'))
     return tuple(out)

@@ -16,7 +16,16 @@ from .io import (
     write_npz,
 )
 from .model import ModalModel, ReductionInfo, UnknownDofError, signal_name
-from .ports import Port, PortError, name_ports, normalise_direction, read_ports
+from .ports import (
+    Port,
+    PortError,
+    apply_signs,
+    name_ports,
+    normalise_direction,
+    port_signs,
+    read_ports,
+    signed_direction,
+)
 from .reduction import CraigBamptonBasis, craig_bampton, craig_bampton_basis
 from .reduction_check import ReductionCheck, reduction_check
 from .solvers import Modes, count_eigenvalues_below, lowest_modes
@@ -57,7 +66,10 @@ __all__ = [
     "Port",
     "PortError",
     "name_ports",
+    "port_signs",
+    "apply_signs",
     "normalise_direction",
+    "signed_direction",
     "read_ports",
     # builder
     "StructureBuilder",

@@ -55,7 +55,15 @@ import scipy.sparse.linalg
 
 from ..tablefile import TableFileError, read_table
 from .model import ModalModel, UnknownDofError
-from .ports import PortError, name_ports, normalise_direction, normalise_node
+from .ports import (
+    PortError,
+    apply_signs,
+    name_ports,
+    normalise_direction,
+    normalise_node,
+    port_signs,
+    read_ports,
+)
 
 __all__ = [
     "MatrixFileError",
@@ -515,7 +523,9 @@ def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffn
         Largest accepted max |A - A^T| / max |A|.
     ports : path-like or sequence of Port, optional
         Names for rows of the DOF map given by node number (or position) and direction (see
-        :mod:`servotune.structure.ports`), e.g. ``pad1.x`` for node 1204 UX.
+        :mod:`servotune.structure.ports`), e.g. ``pad1.x`` for node 1204 UX; a port with a
+        minus sign (``-UX``) is the negative of its row: its row and column of M and K are
+        multiplied by -1 (:func:`~servotune.structure.ports.apply_signs`).
     coordinates : path-like or mapping node -> (x, y, z), optional
         Node positions [m] (CSV ``node,x,y,z``), for ports given by position.
     port_tolerance : float
@@ -581,11 +591,14 @@ def read_structure(mass, stiffness=None, dof_map=None, *, mass_name=None, stiffn
         if coordinates is not None and isinstance(coordinates, (str, os.PathLike)):
             coordinates = read_coordinates(coordinates)
         try:
-            dofs = name_ports(dofs, ports, coordinates, port_tolerance)
+            given = read_ports(ports) if isinstance(ports, (str, os.PathLike)) else ports
+            signs = port_signs(dofs, given, coordinates, port_tolerance)
+            dofs = name_ports(dofs, given, coordinates, port_tolerance)
         except PortError as exc:
             where = f"{ports}: " if isinstance(ports, (str, os.PathLike)) \
                 and str(ports) not in str(exc) else ""
             raise MatrixFileError(f"{where}{exc}") from None
+        m, k = apply_signs(m, signs), apply_signs(k, signs)  # -UX: q_port = -q_export
     return StructureMatrices(m, k, dofs, source)
 
 

@@ -15,6 +15,13 @@ number or by position (the node nearest a point, from a coordinates file ``node,
 and ``rx``/``rotx``/``4`` (rotations), the Ansys and Nastran (component numbers 1-6) ways.
 Positions are in m.
 
+A direction may carry a sign: ``-UX`` (``-x``, ``-ROTX``, Nastran ``-1``; ``+x`` is ``x``) names
+a port whose positive direction is opposite to the export's DOF, as where the encoder head's
+node is rotated or the motor's rotation is defined against the screw's. The port's coordinate
+is then the negative of the export's, q_port = -q_export: :func:`port_signs` gives the sign of
+each row and :func:`apply_signs` turns M and K into D M D and D K D, D = diag(+-1) (a
+congruence with an orthogonal D: exact, symmetric, the same eigenvalues and definiteness).
+
 Where the guide way is rigid ground in the model (as in a model of the slide alone), the
 relative X at a pad is the slide node's X there; with a flexible bed, export the relative
 motion as its own DOF (or a coupling element) and name that one.
@@ -29,6 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse
 
 from ..tablefile import TableFileError, read_table
 
@@ -36,10 +44,13 @@ __all__ = [
     "DIRECTIONS",
     "Port",
     "PortError",
+    "apply_signs",
     "name_ports",
     "normalise_direction",
     "normalise_node",
+    "port_signs",
     "read_ports",
+    "signed_direction",
 ]
 
 DIRECTIONS = ("x", "y", "z", "rx", "ry", "rz")
@@ -53,6 +64,10 @@ for _i, _d in enumerate(DIRECTIONS):
         names = (_d, f"u{_axis}", f"t{_axis}", str(_i + 1), f"t{_i + 1}", f"u{_i + 1}")
     for _name in names:
         _ALIASES[_name] = _d
+_SIGNS = {"+": 1, "-": -1}
+_DIRECTION_FIX = ("use x, y, z, rx, ry, rz (or UX, ROTX, ..., or the component numbers 1-6), "
+                  "with a leading - where the port's positive direction is opposite to the "
+                  "export's (e.g. -UX, -ROTX, -1)")
 
 
 class PortError(TableFileError):
@@ -79,6 +94,32 @@ def normalise_direction(text) -> str | None:
     ['x', 'rz', 'z', 'y', None]
     """
     return _ALIASES.get(str(text).strip().lower())
+
+
+def signed_direction(text) -> tuple[int, str] | None:
+    """Return the sign and the direction of a port's direction, or None.
+
+    Parameters
+    ----------
+    text : str or int
+        A direction as :func:`normalise_direction` knows it, optionally with one leading sign:
+        ``-UX``, ``+x``, ``-ROTX``, Nastran ``-1``.
+
+    Returns
+    -------
+    (int, str) or None
+        The sign (+1 or -1) and the direction (``x`` ... ``rz``); None when the text (after
+        its sign) is not a direction.
+
+    Examples
+    --------
+    >>> [signed_direction(t) for t in ("-UX", "+rotz", "x", -1, "--x", "-foo")]
+    [(-1, 'x'), (1, 'rz'), (1, 'x'), (-1, 'x'), None, None]
+    """
+    text = str(text).strip()
+    sign = _SIGNS.get(text[:1], 0)
+    direction = normalise_direction(text[1:] if sign else text)
+    return None if direction is None else (sign or 1, direction)
 
 
 def normalise_node(text) -> str:
@@ -116,17 +157,29 @@ class Port:
     name : str
         The DOF name servotune uses (``pad1.x``, ``wp.x``, ``motor.rotor`` ...).
     direction : str
-        Any spelling :func:`normalise_direction` knows.
+        Any spelling :func:`normalise_direction` knows, optionally with a sign (``-UX``: the
+        port's positive direction is opposite to the export's DOF); kept normalised, without
+        the sign (``x``).
     node : str or int, optional
         The node number of the export.
     position : (3,) sequence of float, optional
         Instead of ``node``: a point [m]; the nearest node with that direction is taken.
+    sign : {1, -1}
+        +1 when the port is the export's DOF, -1 when it is its negative; a sign written in
+        ``direction`` multiplies it (``Port("encoder.x", "-UX", node=120).sign == -1``).
+
+    Examples
+    --------
+    >>> p = Port("encoder.x", "-UX", node=120)
+    >>> p.direction, p.sign, p.node
+    ('x', -1, '120')
     """
 
     name: str
     direction: str
     node: str | None = None
     position: tuple[float, float, float] | None = None
+    sign: int = 1
 
     def __post_init__(self) -> None:
         name = str(self.name).strip()
@@ -135,10 +188,14 @@ class Port:
         if name.startswith("mode."):
             raise PortError(f"port {name!r}: names starting with 'mode.' are reserved for "
                             "modal DOFs")
-        direction = normalise_direction(self.direction)
-        if direction is None:
-            raise PortError(f"port {name!r}: unknown direction {self.direction!r}; use x, y, z, "
-                            "rx, ry, rz (or UX, ROTX, ..., or the component numbers 1-6)")
+        signed = signed_direction(self.direction)
+        if signed is None:
+            raise PortError(f"port {name!r}: unknown direction {self.direction!r}; "
+                            f"{_DIRECTION_FIX}")
+        if isinstance(self.sign, bool) or self.sign not in (1, -1):
+            raise PortError(f"port {name!r}: sign {self.sign!r}; give +1 or -1 (or write the "
+                            "sign in the direction, e.g. -UX)")
+        sign, direction = signed
         if (self.node is None) == (self.position is None):
             raise PortError(f"port {name!r}: give either a node number or a position x, y, z")
         position = None
@@ -151,6 +208,7 @@ class Port:
         object.__setattr__(self, "direction", direction)
         object.__setattr__(self, "node", None if self.node is None else normalise_node(self.node))
         object.__setattr__(self, "position", position)
+        object.__setattr__(self, "sign", int(sign * self.sign))
 
 
 def read_ports(path) -> tuple[Port, ...]:
@@ -222,6 +280,8 @@ def name_ports(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> tuple[
     Returns
     -------
     tuple of str
+        The names; a port with a sign (``-UX``) names its row too, :func:`port_signs` gives
+        the signs.
 
     Raises
     ------
@@ -235,10 +295,108 @@ def name_ports(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> tuple[
     ...                                          Port("motor.rotor", "rx", node="9")])
     ('wp.x', '7.uy', 'motor.rotor')
     """
+    names = [str(d) for d in dofs]
+    for port, row in _port_rows(names, ports, coordinates, tolerance):
+        names[row] = port.name
+    clash = sorted({n for n in names if names.count(n) > 1})
+    if clash:
+        raise PortError(f"port names {clash} are also names of other DOFs in the DOF map; "
+                        "choose other port names")
+    return tuple(names)
+
+
+def port_signs(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> np.ndarray:
+    """The sign of each row: -1 on the rows of ports given with a minus sign, +1 elsewhere.
+
+    Parameters
+    ----------
+    dofs, ports, coordinates, tolerance
+        As :func:`name_ports`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (n,), +1.0 or -1.0 per DOF: the diagonal of D in q_named = D q_export.
+
+    Raises
+    ------
+    PortError
+        As :func:`name_ports`.
+
+    Examples
+    --------
+    The encoder head's node turned: its UX points against the axis.
+
+    >>> port_signs(["7.ux", "120.ux"], [Port("wp.x", "x", node=7),
+    ...                                 Port("encoder.x", "-UX", node=120)]).tolist()
+    [1.0, -1.0]
+    """
+    dofs = [str(d) for d in dofs]
+    signs = np.ones(len(dofs))
+    for port, row in _port_rows(dofs, ports, coordinates, tolerance):
+        signs[row] = float(port.sign)
+    return signs
+
+
+def apply_signs(matrix, signs):
+    """Return D A D, D = diag(signs): the matrix in DOFs of which some are reversed.
+
+    Parameters
+    ----------
+    matrix : (n, n) array_like or scipy sparse matrix
+        A mass or stiffness matrix [kg, N/m, ...] in the export's DOFs.
+    signs : (n,) array_like
+        +1 or -1 per DOF (:func:`port_signs`).
+
+    Returns
+    -------
+    numpy.ndarray or scipy sparse matrix
+        The matrix with the rows and columns of the -1 DOFs multiplied by -1: a dense array,
+        or a sparse one of the input's format and kind (never made dense). The input itself
+        when every sign is +1.
+
+    Raises
+    ------
+    ValueError
+        When ``signs`` is not n values +1 or -1.
+
+    Notes
+    -----
+    With q_export = D q (D = D^T = D^-1), the kinetic and strain energies 1/2 q^T D M D q and
+    1/2 q^T D K D q give the matrices in the new DOFs: a congruence with an orthogonal D, so
+    D M D is symmetric and definite as M is, with the same eigenvalues; multiplying by +-1 is
+    exact in floating point.
+
+    Examples
+    --------
+    >>> apply_signs([[2.0, -1.0], [-1.0, 1.0]], [1, -1]).tolist()
+    [[2.0, 1.0], [1.0, 1.0]]
+    """
+    signs = np.asarray(signs, dtype=float)
+    n = signs.size
+    if signs.ndim != 1 or not np.all(np.abs(signs) == 1.0):
+        raise ValueError(f"signs must be a vector of +1 and -1, got {signs!r}")
+    if scipy.sparse.issparse(matrix):
+        if matrix.shape != (n, n):
+            raise ValueError(f"the matrix is {matrix.shape} but there are {n} signs")
+        if np.all(signs > 0):
+            return matrix
+        coo = matrix.tocoo(copy=True)
+        coo.data = coo.data * signs[coo.row] * signs[coo.col]
+        return coo.asformat(matrix.format)
+    a = np.asarray(matrix)
+    if a.shape != (n, n):
+        raise ValueError(f"the matrix is {a.shape} but there are {n} signs")
+    if np.all(signs > 0):
+        return a
+    return signs[:, None] * a * signs[None, :]
+
+
+def _port_rows(dofs: list[str], ports, coordinates, tolerance):
+    """(port, row) of each port in the DOF list; raises PortError naming the port."""
     if isinstance(ports, (str, Path)):
         ports = read_ports(ports)
     ports = tuple(ports)
-    dofs = [str(d) for d in dofs]
     lookup: dict[tuple[str, str], int] = {}
     by_node: dict[str, list[str]] = {}
     labels: dict[str, list[str]] = {}  # the export's own spelling, for messages
@@ -253,9 +411,9 @@ def name_ports(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> tuple[
     if coordinates is not None:
         coords = {normalise_node(k): np.asarray(v, dtype=float)
                   for k, v in dict(coordinates).items()}
-    names = list(dofs)
     taken: dict[int, str] = {}
     seen = set()
+    out = []
     for port in ports:
         if not isinstance(port, Port):
             raise PortError(f"expected Port objects, got {port!r}")
@@ -278,12 +436,8 @@ def name_ports(dofs, ports, coordinates=None, tolerance: float = 1e-3) -> tuple[
             raise PortError(f"ports {taken[row]!r} and {port.name!r} are the same DOF "
                             f"({dofs[row]}); give each port its own DOF")
         taken[row] = port.name
-        names[row] = port.name
-    clash = sorted({n for n in names if names.count(n) > 1})
-    if clash:
-        raise PortError(f"port names {clash} are also names of other DOFs in the DOF map; "
-                        "choose other port names")
-    return tuple(names)
+        out.append((port, row))
+    return out
 
 
 def _node_key(node: str):
