@@ -653,6 +653,9 @@ def simulate_sweep(axis: NonlinearAxis, force_pp: float, band_hz, resonances, sp
     step = min(2.5e-4, 1.0 / (16.0 * band_hz[1]))
     step = 2.5e-4 / math.ceil(2.5e-4 / step)
     resonances = list(resonances)
+    # what the sweep is judged by (a long sweep's memory is its histories)
+    recorded = ["wp_x", *(p.replace(".", "_") for p in axis.pads)] + (
+        ["torque"] if axis.drive is not None else [])
     for _ in range(max_passes):
         plan = sweep_plan(band_hz[0], band_hz[1], 0.5 * force_pp, resonances)
         settle = SETTLE if speed else 0.0
@@ -661,7 +664,7 @@ def simulate_sweep(axis: NonlinearAxis, force_pp: float, band_hz, resonances, sp
         n = round(scenario.duration / step)
         scenario = dataclasses.replace(scenario, duration=n * step)
         try:
-            result = simulate(axis, scenario, step=step, record_step=step)
+            result = simulate(axis, scenario, step=step, record_step=step, record=recorded)
         except SimulationError as exc:
             return Simulation(**tags, kind="sweep", force_pp=force_pp, speed=speed,
                               band_hz=tuple(band_hz), error=str(exc).split(";")[0],
@@ -708,7 +711,8 @@ def simulate_feeding(axis: NonlinearAxis, speed: float, tags: dict,
 
     wall = time.perf_counter()
     try:
-        result = simulate(axis, constant_speed(speed, duration))
+        result = simulate(axis, constant_speed(speed, duration),
+                          record=[f"v_{p.replace('.', '_')}" for p in axis.pads])
     except SimulationError as exc:
         return Simulation(**tags, kind="stick-slip", force_pp=0.0, speed=speed,
                           band_hz=(0.0, 0.0), stick_slip=True, error=str(exc).split(";")[0],

@@ -520,8 +520,8 @@ def controller_arrays(controller, data: dict, inputs, samples_per_step: int) -> 
 
 
 def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
-                    but_re, but_im, brt_re, brt_im, cyt_re, cyt_im, prop_re, prop_im, alpha_re,
-                    alpha_im, beta_re, beta_im, kmat, kerr, rparams, r_tol,
+                    s_base, but_re, but_im, brt_re, brt_im, cyt_re, cyt_im, prop_re, prop_im,
+                    alpha_re, alpha_im, beta_re, beta_im, kmat, kerr, rparams, r_tol,
                     err_scale, tol, cpt_re, cpt_im, dpu, dpr, n_force, force_idx, n_pads,
                     cot_re, cot_im, dou, dor, rec_out, rec_energy, stats, ctl_every, ctl_n,
                     ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, ctl_state, meas_re, meas_im,
@@ -561,7 +561,12 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
         Cumulative works [J] and current powers [W] of :data:`N_POWERS` channels; updated in
         place.
     samples : (K, nu) numpy.ndarray
-        Known inputs sampled every h/3 from t = 0 (three spare samples at the end).
+        Known inputs sampled every h/3: row j is sample ``s_base + j`` (sample i at t = i h/3).
+        The rows must reach from one sample before ``3 n0`` (or from sample 0) to three after
+        ``3 n1`` (or the last sample), the neighbours of the cubic interpolation.
+    s_base : int
+        Index of the first row of ``samples`` among all samples (0: they start at t = 0). A long
+        run thus holds only a window of its inputs at a time.
     but_re, but_im : (nu, m) numpy.ndarray
         ``(V^-1 B_u)^T``.
     brt_re, brt_im : (n_r, m) numpy.ndarray
@@ -664,14 +669,15 @@ def integrate_chunk(h, n0, n1, record_every, level, xr, xm, r_last, energy, powe
     while pos < end:
         lev = level
         span = 1 << (top - lev)
-        s0 = pos * 3.0 / unit
+        s0 = pos * 3.0 / unit - s_base
         ds = 1.0 / (1 << lev)
         if samples_per_step > 0 and pos % (unit * samples_per_step) == 0 \
                 and pos != ctl_state[0]:
             ctl_state[0] = pos
             _controller_update(pos // (unit * samples_per_step), xr, xm, samples,
-                               (pos * 3) // unit, meas_re, meas_im, ref_cols, ctl_every, ctl_n,
-                               ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held, g_ctl, tmp_ctl)
+                               (pos * 3) // unit - s_base, meas_re, meas_im, ref_cols,
+                               ctl_every, ctl_n, ctl_a, ctl_b, ctl_c, ctl_d, ctl_x, ctl_held,
+                               g_ctl, tmp_ctl)
         # known inputs projected on the modes at the four nodes
         for k in range(4):
             _u_into(samples, s0 + k * ds, un[k])

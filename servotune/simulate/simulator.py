@@ -45,6 +45,9 @@ DEFAULT_STEP = 2.5e-4        # [s]: 40 steps per cycle at 100 Hz (shorter where 
 DEFAULT_RECORD_STEP = 5e-4   # [s]
 DEFAULT_TOLERANCE = 1e-4     # local error of the pad motion per step, relative to vs and Fs/sigma0
 CHECKPOINT = 0.05            # [s] between energy checkpoints (and progress reports)
+#: Base steps whose known inputs are held at a time (3 samples per step): a long run's inputs
+#: take the memory of this window, not of the run.
+INPUT_WINDOW = 1 << 15
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +120,7 @@ def _steps(value: float, h: float, what: str) -> int:
 
 def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_STEP,
              record_step: float = DEFAULT_RECORD_STEP, tolerance: float = DEFAULT_TOLERANCE,
-             window=(), progress=False) -> SimulationResult:
+             window=(), progress=False, record=None) -> SimulationResult:
     """Integrate the nonlinear axis through a scenario, from rest.
 
     The linear part (:func:`~servotune.simulate.system.axis_system`) is diagonalised once and
@@ -150,6 +153,11 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
         e.g. the ends of an energy window.
     progress : bool or callable
         True: a progress bar on standard error; a callable gets ``(t, duration)``.
+    record : sequence of str, optional
+        The signals to record (names of the result's signals, outputs or inputs, e.g.
+        ``("wp_x", "torque")``); None records all. The histories are the memory of a long run
+        (a row per record step and signal); its inputs are held :data:`INPUT_WINDOW` steps at
+        a time.
 
     Returns
     -------
@@ -168,7 +176,8 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
         Bad arguments: ``axis`` not a :class:`NonlinearAxis` or ``scenario`` not a
         :class:`~servotune.simulate.scenario.Scenario`, a step or tolerance not positive, a
         duration, record step or window time not a whole multiple of the step, a scenario
-        force on a DOF the structure does not have, or a move of an axis without drive.
+        force on a DOF the structure does not have, a move of an axis without drive, or a
+        name in ``record`` that is neither an output nor an input of the run.
 
     See Also
     --------
@@ -195,25 +204,56 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     n_total = _steps(scenario.duration, h, "the scenario duration")
     record_every = _steps(record_step, h, "record_step")
     wall0 = time.perf_counter()
-    # known inputs, sampled every h/3 (three spare samples for the cubic at the end)
-    t_u = np.arange(3 * n_total + 4) * (h / 3.0)
-    sig = scenario.signals(t_u)
-    for name in sig:
+    # known inputs, sampled every h/3 (three spare samples for the cubic at the end), held a
+    # window at a time; which of them the scenario has is found over the whole run first
+    n_samples = 3 * n_total + 4
+
+    def sampled(k0, k1):
+        return scenario.signals(np.arange(k0, k1) * (h / 3.0))
+
+    sig_names = {}
+    for k0 in range(0, n_samples, 3 * INPUT_WINDOW):
+        sig_names.update(dict.fromkeys(sampled(k0, min(n_samples, k0 + 3 * INPUT_WINDOW))))
+    for name in sig_names:
         if name.startswith("f_") and name[2:] not in {signal_name(d) for d in
                                                       axis.structure.dofs}:
             raise ValueError(f"the scenario's force {name!r} acts on a DOF the structure does "
                              f"not have")
-    if axis.drive is None and any(s in sig for s in ("x_ref", "v_ref", "a_ref")):
+    if axis.drive is None and any(s in sig_names for s in ("x_ref", "v_ref", "a_ref")):
         raise ValueError("the scenario moves the axis but the axis has no drive")
     nonlinear = axis.friction is not None and axis.friction.nonlinear
-    inputs = list(sig) + (["one"] if nonlinear else [])
+    inputs = list(sig_names) + (["one"] if nonlinear else [])
     sysm = axis_system(axis.structure, axis.drive, axis.friction, axis.pads, scenario.speed,
                        inputs=inputs)
-    samples = np.column_stack([sig[s] if s in sig else (np.ones_like(t_u) if s == "one"
-                                                        else np.zeros_like(t_u))
-                               for s in sysm.inputs])
-    samples = np.ascontiguousarray(samples) if samples.size else np.zeros((t_u.size, 0))
+    kept = list(range(len(sysm.outputs)))
+    if record is not None:
+        names = [str(r) for r in ([record] if isinstance(record, str) else record)]
+        unknown = [r for r in names if r not in sysm.outputs and r not in sig_names]
+        if unknown:
+            raise ValueError(f"record: {unknown} are not signals of this run; it has the "
+                             f"outputs {', '.join(sysm.outputs)} and the inputs "
+                             f"{', '.join(sig_names) or '(none)'}")
+        kept = [i for i, o in enumerate(sysm.outputs) if o in names]
+        recorded_inputs = [s for s in sig_names if s in names]
+    else:
+        recorded_inputs = list(sig_names)
+
+    def window_of(n0, n1):
+        # the samples that steps n0..n1-1 read: one before 3 n0 to three after 3 n1
+        k0, k1 = max(0, 3 * n0 - 1), min(n_samples, 3 * n1 + 4)
+        sig = sampled(k0, k1)
+        cols = [sig[s] if s in sig else np.full(k1 - k0, 1.0 if s == "one" else 0.0)
+                for s in sysm.inputs]
+        rows = np.column_stack(cols) if cols else np.zeros((k1 - k0, 0))
+        return k0, np.ascontiguousarray(rows, dtype=float)
+
     data = _prepare(sysm, h, axis, scenario)
+    for key in ("cot_re", "cot_im"):
+        data[key] = np.ascontiguousarray(data[key][:, kept])
+    for key in ("dou", "dor"):
+        data[key] = np.ascontiguousarray(data[key][kept])
+    w_end = min(n_total, INPUT_WINDOW)
+    s_base, samples = window_of(0, w_end)
     nr = data["br"].shape[1]
     m = data["lam"].size
     xr = np.zeros(m)
@@ -241,7 +281,8 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
         bounds.add(k)
     bounds = sorted(bounds)
     n_rec = n_total // record_every
-    rec = np.zeros((n_rec + 1, data["cot_re"].shape[1]))
+    # by columns: each recorded signal is a contiguous column, handed out without a copy
+    rec = np.zeros((n_rec + 1, data["cot_re"].shape[1]), order="F")
     rec_work = np.zeros((n_rec + 1, integrator.N_POWERS))
     rec[0] = data["dou"] @ samples[0] + (data["dor"] @ r_last[nr:] if nr else 0.0)
     cps_t, cps_work, cps_struct, cps_bristle = [], [], [], []
@@ -270,11 +311,14 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     kernel = integrator.chunk_kernel(data["remainder"])
     ctl = integrator.controller_arrays(sysm.controller, data, sysm.inputs, sps)
     for n0, n1 in itertools.pairwise(bounds):
+        if n1 > w_end:
+            w_end = min(n_total, max(n1, n0 + INPUT_WINDOW))
+            s_base, samples = window_of(n0, w_end)
         tk = time.perf_counter()
         out = rec[1 + n0 // record_every:1 + n1 // record_every]
         out_w = rec_work[1 + n0 // record_every:1 + n1 // record_every]
         done, level = kernel(
-            h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples,
+            h, n0, n1, record_every, level, xr, xm, r_last, energy, power, samples, s_base,
             *data["split"], w.kmat, w.kerr, rparams,
             data["r_tol"], data["err_scale"], tolerance, data["cpt_re"], data["cpt_im"],
             data["dpu"], data["dpr"], data["n_force"], data["force_idx"], n_pads_power,
@@ -290,9 +334,11 @@ def simulate(axis: NonlinearAxis, scenario: Scenario, *, step: float = DEFAULT_S
     n_end = n_total if failed_at is None else failed_at
     n_keep = 1 + n_end // record_every
     t_rec = np.arange(n_keep) * (record_every * h)
-    signals = {name: rec[:n_keep, i].copy() for i, name in enumerate(sysm.outputs)}
-    for name, s in sig.items():
-        signals[name] = s[::3 * record_every][:n_keep].copy()
+    signals = {sysm.outputs[i]: rec[:n_keep, j] for j, i in enumerate(kept)}
+    at_records = scenario.signals(t_rec) if recorded_inputs else {}
+    for name in recorded_inputs:
+        signals[name] = (np.array(at_records[name], dtype=float) if name in at_records
+                         else np.zeros(n_keep))
     stat = {"step": h, "base_steps": int(n_end), "steps": int(stats[0]),
             "newton_iterations": int(stats[1]), "rejected_steps": int(stats[2]),
             "deepest_level": int(stats[3]), "tolerance": tolerance,
