@@ -13,7 +13,11 @@
    are added to the grids and the problem re-solved warm, until grid and truth agree (the
    position-loop bandwidth ratio of the hierarchy gates is updated with it).
 4. :func:`servotune.tuning.verify.verify` and :func:`requirement_checks`: the independent
-   check of the design in every model.
+   check of the design in every model. When it fails only on Ti w_b above its rule (judged on
+   the design, not a row of the NLP: :mod:`servotune.tuning.requirements.integral_time`), Ti
+   is lowered to the rule (:func:`repair`) and the problem re-solved from there with Ti capped
+   at that value and exchanged again (up to :data:`TI_RULE_ROUNDS` times); the re-solve is
+   kept only when its check holds, and ``notes`` says where Ti was capped.
 
 When no start reaches a usable optimum, the dense check of the initial design tells the two
 failures apart: if the initial design meets every requirement, the requirements are feasible
@@ -77,7 +81,9 @@ class TuningResult:
     Attributes
     ----------
     problem : TuningProblem
-        The problem solved (without the models excluded at the start).
+        The problem solved (without the models excluded at the start), with the bounds as
+        given: when Ti was capped by its bandwidth rule (see :func:`tune`), ``notes`` says so
+        and ``active`` names the cap when Ti sits at it.
     initial, design : Design
     before, after : Performance
         Verified with python-control in every model (``after`` None if not verified).
@@ -1007,6 +1013,9 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         ``success`` only when every requirement check holds and IPOPT converged. When no
         start reaches a usable optimum but the initial design meets every requirement, the
         initial design, with the reason in ``notes`` ("the optimiser found no better design").
+        When the optimum fails only on Ti times the velocity bandwidth above
+        ``ti_bandwidth_max`` (a rule the NLP does not carry), the design re-optimised with Ti
+        capped at the rule, with the cap in ``notes`` (and in ``active`` when Ti sits at it).
 
     Raises
     ------
@@ -1073,7 +1082,48 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         ex = _repaired_exchange(problem, kernels, gamma, ex, current_bw, max_exchange,
                                 tolerance, callback)
     # 4. the optimiser's prediction and the independent check
+    judged = _judge(problem, ex, reference, tolerance, current_bw)
+    notes, iterations = (), phase.iterations + ex.iterations
+    if _only_above_ti_rule(judged):
+        # the rule Ti w_b <= ti_bandwidth_max is not a row of the NLP: Ti lowered to it and
+        # the problem re-solved with Ti capped there
+        capped = _ti_capped(judged, kernels, gamma, reference, current_bw, max_exchange,
+                            tolerance, callback)
+        iterations += capped.iterations
+        if capped.judged is not None:
+            judged, notes = capped.judged, (capped.note,)
+    ex = judged.outcome
     active = _active(problem, ex.design, ex.solver, ex.best)
+    cap = judged.problem.bounds["ti"][1] if "ti" in problem.free else None
+    if cap is not None and cap < problem.bounds["ti"][1] and ex.design.ti >= cap * (1 - 1e-4):
+        active.append(_ti_cap_text(problem, cap))
+    return TuningResult(
+        problem=problem, initial=x0, design=ex.design, before=before, after=judged.after,
+        predicted=judged.prediction, success=not judged.reasons, reasons=judged.reasons,
+        active=tuple(active), checks=judged.checks, excluded=excluded, start=reference,
+        held=held, notes=notes,
+        stats=_statistics(n_starts, phase.polished, iterations, ex.rounds, ex.grids, problem,
+                          ex.best.stats["return_status"], current_bw, t_start))
+
+
+@dataclass(frozen=True)
+class _Judged:
+    """An exchange's outcome with the optimiser's prediction, the independent check of its
+    design and the reasons it fails (empty when it succeeds); ``problem`` is the problem it
+    was solved in (its bound of Ti may be capped by :func:`_ti_capped`)."""
+
+    problem: TuningProblem
+    outcome: ExchangeOutcome
+    prediction: Prediction
+    after: Performance
+    checks: tuple[RequirementCheck, ...]
+    reasons: tuple[str, ...]
+
+
+def _judge(problem: TuningProblem, ex: ExchangeOutcome, reference: Design, tolerance: float,
+           current_bw: float | None) -> _Judged:
+    """Stage 4: the optimiser's prediction and the independent check of the exchange's
+    design, and the reasons it fails."""
     pred = predict(problem, ex.design, reference)
     reasons = []
     if ex.failed:
@@ -1090,13 +1140,88 @@ def tune(problem: TuningProblem, starts: int = 4, seed: int = 0, max_exchange: i
         reasons.append(
             f"verification: the state-space compliance peak {after.peak_compliance:.4g} m/N "
             f"differs from the optimiser's {pred.peak_compliance:.4g} m/N by more than 1%")
-    return TuningResult(
-        problem=problem, initial=x0, design=ex.design, before=before, after=after,
-        predicted=pred, success=not reasons, reasons=tuple(reasons), active=tuple(active),
-        checks=checks, excluded=excluded, start=reference, held=held,
-        stats=_statistics(n_starts, phase.polished, phase.iterations + ex.iterations,
-                          ex.rounds, ex.grids, problem, ex.best.stats["return_status"],
-                          current_bw, t_start))
+    return _Judged(problem, ex, pred, after, checks, tuple(reasons))
+
+
+def _above_ti_rule(check: RequirementCheck) -> bool:
+    """A failed check of Ti w_b above its rule (the upper bound, not a row of the NLP)."""
+    return (not check.holds and check.requirement.startswith("Ti") and check.value is not None
+            and check.limit is not None and check.value > check.limit)
+
+
+def _only_above_ti_rule(judged: _Judged) -> bool:
+    """The design is stable and fails only on Ti w_b above its rule."""
+    failed = [c for c in judged.checks if not c.holds]
+    return (judged.after.stable and bool(failed) and len(failed) == len(judged.reasons)
+            and all(_above_ti_rule(c) for c in failed))
+
+
+def _ti_cap_text(problem: TuningProblem, cap: float) -> str:
+    """How Ti's cap is reported among the active constraints."""
+    return (f"Ti capped at {cap:.4g} s by the rule Ti x w_b <= ti_bandwidth_max "
+            f"({problem.requirements.ti_bandwidth_max:g})")
+
+
+#: Largest number of rounds of Ti lowered to its bandwidth rule and the problem re-solved
+#: (the bandwidth moves with Kp when Ti changes).
+TI_RULE_ROUNDS = 2
+
+
+@dataclass(frozen=True)
+class _TiCapped:
+    """The outcome of :func:`_ti_capped`: the judged re-solve (None when it did not
+    succeed), the note that says so, and the IPOPT iterations it took."""
+
+    judged: _Judged | None
+    note: str
+    iterations: int
+
+
+def _ti_capped(judged: _Judged, kernels: Kernels, gamma: np.ndarray, reference: Design,
+               current_bw: float | None, max_exchange: int, tolerance: float,
+               callback) -> _TiCapped:
+    """When the design fails only on Ti w_b above its rule: what an engineer does, Ti lowered
+    to the rule (:func:`repair`) and the problem re-solved from there with Ti at most that
+    value (its upper bound capped), on the refined grids and exchanged again; up to
+    :data:`TI_RULE_ROUNDS` times. The re-solve counts only when it converges, is stable and
+    its dense check holds; else the given outcome stands."""
+    problem = judged.problem
+    lo, hi = problem.bounds["ti"]
+    x0, first_ti = problem.initial_design(), judged.outcome.design.ti
+    last, iterations = judged, 0
+    for _ in range(TI_RULE_ROUNDS):
+        start = repair(problem, last.outcome.design, current_bw)
+        if start is None or not x0.ti <= start.ti < hi:
+            # (the cap may not fall below the initial Ti: the problem must hold its start)
+            break
+        capped = dataclasses.replace(problem, bounds={**problem.bounds, "ti": (lo, start.ti)})
+        ex = last.outcome
+        solver = Solver(capped, kernels, ex.grids.band.size, ex.grids.loop.size, max_iter=300,
+                        callback=callback)
+        sol = solver.solve(start, ex.grids.band_rows, ex.grids.loop_rows)
+        iterations += sol.stats["iter_count"]
+        if not (sol.converged and all(model_stability(capped, sol.design))):
+            break
+        again = exchange_grids(capped, kernels, ex.grids, gamma, sol, solver, current_bw,
+                               max_exchange, tolerance, callback)
+        iterations += again.iterations
+        if again.failed:
+            break
+        last = _judge(capped, again, reference, tolerance, current_bw)
+        if not last.reasons:
+            req = problem.requirements
+            note = (f"{_ti_cap_text(problem, start.ti)}: the optimum without the cap had Ti "
+                    f"{first_ti:.4g} s, above the rule (checked on the design, not a constraint "
+                    f"of the optimiser), so Ti was lowered to the rule with 10 % to spare and "
+                    f"the design re-optimised with Ti at most there; the bounds of Ti as given "
+                    f"({lo:.4g}, {hi:.4g}) s. Ti x w_b now "
+                    + ", ".join(f"{c.value:.3g}" for c in last.checks
+                                if c.requirement.startswith("Ti") and c.value is not None)
+                    + f" (within [{req.ti_bandwidth_min:g}, {req.ti_bandwidth_max:g}])")
+            return _TiCapped(last, note, iterations)
+        if not _only_above_ti_rule(last):
+            break
+    return _TiCapped(None, "", iterations)
 
 
 #: Largest number of repair steps of a design the exchange could not make feasible.
@@ -1107,8 +1232,9 @@ def repair(problem: TuningProblem, design: Design, current_bw: float | None):
     """Return a design near ``design`` that meets every requirement in the dense check, or
     None: the moves a commissioning engineer makes, one step per failed check (Ms of the
     velocity loop or instability: Kp x 0.8; Ti below its bandwidth rule: Ti raised to it with
-    10 % to spare; the loop hierarchy or the position loop's Ms: Kv x 0.7), within the bounds
-    and the free variables, up to :data:`REPAIR_STEPS` times.
+    10 % to spare; Ti above it: Ti lowered to it with 10 % to spare; the loop hierarchy or the
+    position loop's Ms: Kv x 0.7), within the bounds and the free variables, up to
+    :data:`REPAIR_STEPS` times.
 
     Parameters
     ----------
@@ -1133,12 +1259,19 @@ def repair(problem: TuningProblem, design: Design, current_bw: float | None):
         change = {}
         if not perf.stable or any(c.requirement == "Ms velocity loop" for c in failed):
             change["kp"] = d.kp * 0.8
+        raised, lowered = [], []
         for c in failed:
-            if (c.requirement.startswith("Ti") and c.value is not None and c.limit
-                    and c.value < c.limit):
-                change["ti"] = d.ti * c.limit / c.value * 1.1
+            if c.requirement.startswith("Ti") and c.value is not None and c.limit:
+                # Ti w_b against the rule: Ti moved to it with 10 % to spare (w_b barely moves
+                # with Ti); raised when one model is below, else lowered to the strictest
+                if c.value < c.limit:
+                    raised.append(d.ti * c.limit / c.value * 1.1)
+                else:
+                    lowered.append(d.ti * c.limit / c.value / 1.1)
             elif c.requirement in ("loop hierarchy", "Ms position loop"):
                 change["kv"] = d.kv * 0.7
+        if raised or lowered:
+            change["ti"] = max(raised) if raised else min(lowered)
         change = {v: float(np.clip(x, *problem.bounds[v])) for v, x in change.items()
                   if v in problem.free}
         if not change or all(change[v] == getattr(d, v) for v in change):
