@@ -41,7 +41,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-import control
 import numpy as np
 
 from .closed_loop import axis_compliance
@@ -337,9 +336,11 @@ class RegimeModel:
             k, d = self.friction.with_viscous(0.0).presliding()
             return Contact.stiction(k, d, c)
         if self.kind == "describing":
+            # a spring and a damper on the pads' own motion: no state of its own (an
+            # integrator of the pad velocity would repeat the structure's displacement, a
+            # neutral mode whose rounding can read as growth)
             keq, ceq = self._keq_ceq
-            element = control.ss([[0.0]], [[1.0]], [[keq]], [[ceq + c]])
-            return Contact("sliding", system=element,
+            return Contact("equivalent", stiffness=keq, damping=ceq + c,
                            note=f"describing function at A = {self.amplitude:.3g} m, "
                                 f"{self.frequency * HZ_PER_RAD_S:.1f} Hz: Keq = {keq:.3g} N/m, "
                                 f"Ceq = {ceq + c:.3g} N s/m")
