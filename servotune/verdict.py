@@ -58,6 +58,7 @@ from .regimes import FrictionSpread, as_law, friction_spread
 from .simulate.result import SimulationError
 from .simulate.scenario import constant_speed, planned_sweep, sweep_plan
 from .simulate.simulator import NonlinearAxis, simulate
+from .simulate.truncation import Truncation
 from .units import HZ_PER_RAD_S
 
 __all__ = ["Simulation", "CornerVerdict", "RegimeVerdict", "Verdict", "Evidence",
@@ -726,13 +727,35 @@ def simulate_feeding(axis: NonlinearAxis, speed: float, tags: dict,
                       wall_time=time.perf_counter() - wall)
 
 
+def simulated_structure(axis, problem) -> Truncation:
+    """The structure the verdict simulates: the axis' own without the fixed-interface modes far
+    above the band the verdict sweeps (up to 2.5 times the requirements band's top, at most
+    2 kHz) and the drive's sampling
+    (:func:`servotune.simulate.truncation.simulation_structure`)."""
+    from .plant import WP_DOFS
+    from .simulate.truncation import simulation_structure
+
+    drive = problem.drive
+    ports = [d for d in WP_DOFS if d in axis.structure.dofs] + list(axis.pads)
+    rate = 0.0
+    if drive is not None:
+        ports += [d for d in (drive.motor.rotor, drive.motor.stator, drive.encoder) if d]
+        if not drive.digital.is_continuous:
+            rate = 1.0 / drive.sampling.current_period
+    lo, hi = (b * HZ_PER_RAD_S for b in problem.requirements.band)
+    return simulation_structure(axis.structure, ports, min(2.5 * hi, 2000.0), rate,
+                                max(min(lo, 1.0), 0.1))
+
+
 def design_axis(axis, problem, design, friction=None) -> NonlinearAxis:
     """The nonlinear axis of a design: the pads with the axis' friction law (or ``friction``,
     a law or LuGre parameters) with its viscous part the design's C, the design's drive with
-    full velocity feed-forward (the axis follows its feed without lag)."""
+    full velocity feed-forward (the axis follows its feed without lag), the structure without
+    the modes far above what the verdict excites (:func:`simulated_structure`)."""
     drive = dataclasses.replace(problem.drive_for(design), velocity_feedforward=1.0)
     law = as_law(axis.friction.law if friction is None else friction)
-    return NonlinearAxis(axis.structure, drive, axis.pads, law.with_viscous(float(design.c)))
+    return NonlinearAxis(simulated_structure(axis, problem).structure, drive, axis.pads,
+                         law.with_viscous(float(design.c)))
 
 
 # --------------------------------------------------------------------------------- verdict
@@ -1269,7 +1292,7 @@ def nonlinear_verdict(axis, result, executor=None, forces=None, band_hz=None,
         levels_of, corner_levels_of, {v.name: v.band_hz for v in verdicts}, problem, simulated,
         default_process)
     checked, not_checked = _checked_lines(problem, verdicts, box if spread_regimes else None,
-                                          result)
+                                          result, simulated=simulated_structure(axis, problem))
     return Verdict(verified=linear_holds and nonlinear_holds, linear_holds=linear_holds,
                    nonlinear_holds=nonlinear_holds, regimes=tuple(verdicts), tolerance=tol,
                    reasons=tuple(reasons), checked=checked, not_checked=not_checked,
@@ -1282,7 +1305,8 @@ def _law_name(problem) -> str:
     return "/".join(names) if names else "viscous"
 
 
-def _checked_lines(problem, verdicts, box, result) -> tuple[tuple[str, ...], tuple[str, ...]]:
+def _checked_lines(problem, verdicts, box, result, simulated: Truncation | None = None
+                   ) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """What the verdict checked and what not, each a line that is true of this run."""
     thrust = problem.thrust
     budget = ("the thrust budget on the motor's torque-speed curve ("
@@ -1302,7 +1326,9 @@ def _checked_lines(problem, verdicts, box, result) -> tuple[tuple[str, ...], tup
                                                             and s.design == "after"}))
                     + " N p-p" for v in verdicts)
         + ("; stick-slip runs at each feed speed" if any(v.speed > 0 for v in verdicts)
-           else ""),
+           else "")
+        + (f"; the structure simulated: {simulated.describe()}"
+           if simulated is not None and simulated.truncated else ""),
         *(["nonlinear, between the simulated levels: the periodic response by harmonic "
            "balance (9 harmonics) at " + "; ".join(
                f"{v.name} " + ", ".join(f"{h.force_pp:.3g}" for h in v.harmonic) + " N p-p"
