@@ -115,8 +115,10 @@ def _box(b, h, t):
     return area, i_h, i_b, 4 * am**2 * t / (2 * (b + h - 2 * t))
 
 
-def build_table_axis():
-    """Sparse (CSR) mass and stiffness of the table axis and its DOF names."""
+def build_table_axis(refine: int = 1):
+    """Sparse (CSR) mass and stiffness of the table axis and its DOF names; ``refine``
+    multiplies the number of beam elements of the screw, the table and the column (1: the
+    146-DOF model of ``table_axis``; the ports keep their names at every refinement)."""
     sb = StructureBuilder()
     pitch = SCREW_LEAD / TWO_PI
     for name in ("motor.rotor", "motor.stator"):
@@ -131,7 +133,7 @@ def build_table_axis():
     d = SCREW_ROOT_DIAMETER
     area, inertia = math.pi * d * d / 4, math.pi * d**4 / 64
     screw = sb.add_beam("screw.0", "screw.1", area=area, iy=inertia, iz=inertia,
-                        torsion=2 * inertia, n_elements=8, **STEEL)
+                        torsion=2 * inertia, n_elements=8 * refine, **STEEL)
     sb.add_spring({"motor.rotor": 1.0, "screw.0.rx": -1.0}, K_COUPLING)
     sb.add_spring({"screw.0.x": 1.0}, K_BEARING_AXIAL)
     for end in (screw[0], screw[-1]):
@@ -145,7 +147,7 @@ def build_table_axis():
     a_t, ih_t, ib_t, tor_t = _box(0.55, 0.25, 0.025)
     rho = TABLE_MASS / (a_t * (TABLE_X[1] - TABLE_X[0]))
     table = sb.add_beam("table.0", "table.1", e=CAST_IRON["e"], nu=CAST_IRON["nu"], rho=rho,
-                        area=a_t, iy=ih_t, iz=ib_t, torsion=tor_t, n_elements=4)
+                        area=a_t, iy=ih_t, iz=ib_t, torsion=tor_t, n_elements=4 * refine)
     for k, x in enumerate(PADS_X, start=1):
         pad = f"pad{k}"
         sb.add_node(pad, (x, 0.0, 0.0))
@@ -176,7 +178,7 @@ def build_table_axis():
     sb.add_rigid_link(centre, "column.0", K_LINK)
     a_c, ih_c, ib_c, tor_c = _box(0.22, 0.22, 0.015)
     sb.add_beam("column.0", "column.1", area=a_c, iy=ih_c, iz=ib_c, torsion=tor_c,
-                n_elements=4, up=(1.0, 0.0, 0.0), **STEEL)
+                n_elements=4 * refine, up=(1.0, 0.0, 0.0), **STEEL)
     sb.add_node("wp", (0.0, 0.0, WP_Z))
     sb.add_mass("wp", WP_MASS, (WP_MASS * 0.02, WP_MASS * 0.02, WP_MASS * 0.02))
     sb.add_rigid_link("column.1", "wp", K_LINK)
