@@ -136,7 +136,7 @@ def stepped_sine(setup, force_pp: float, omega, speed: float = 0.0, tolerance: f
         duration = max(first, 3.0 * window)
         while True:
             result = simulate(axis, _scenario(force_pp, w, speed, duration),
-                              record_step=STEP / 2)
+                              record_step=STEP / 2, record=("wp_x",))
             t, x = result.t, result["wp_x"]
             end = float(t[-1])
             last = _fundamental(t, x, w, end - window, end + 1e-12)
