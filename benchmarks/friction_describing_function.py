@@ -7,16 +7,21 @@ amplitudes from 0.2 to 50 um at 20 Hz.
 * servotune: :func:`servotune.friction.describing_function` at its default steps per period
   (exponential integrator in the bristle time, all amplitudes at once, half a period by
   antisymmetry, phase steps graded towards the reversals).
-* baselines: ``scipy.integrate.solve_ivp`` with Radau (analytic Jacobian) and with LSODA, one
-  amplitude at a time, given the same advantages: the integration is split at the velocity
-  reversals, and the periodic state is found by shooting (one period carrying the bristle time
-  as an extra state, z0 = B / (1 - P)), then one period more accumulates the energy and Keq.
+* baselines: ``scipy.integrate.solve_ivp`` with LSODA and with Radau, both given the analytic
+  Jacobian (``jac=``), one amplitude at a time, given the same advantages: the integration is
+  split at the velocity reversals, and the periodic state is found by shooting (one period
+  carrying the bristle time as an extra state, z0 = B / (1 - P)), then one period more
+  accumulates the energy and Keq.
 
 Accuracy is made equal first: a reference is computed with Radau at rtol = 1e-11; servotune's
-default reaches some error against it, and each scipy method runs at the loosest rtol whose
-energies are all within that error (at least 1e-9: scipy's ladder ends at 1e-10). ``speedup``
-is the faster scipy method's time over servotune's at these settings. A second comparison
-gives each method its cheapest setting within 1e-4.
+default reaches some error against it, and each scipy method runs at the loosest rtol of the
+1-2-5 ladder 1e-1, 5e-2, 2e-2, 1e-2, ..., 2e-10, 1e-10 (tried loosest first) whose energies
+are all within that error (at least 1e-9, as the ladder ends at 1e-10); atol follows rtol.
+``speedup`` is the faster scipy method's time over servotune's at these settings. A second
+comparison gives each method its cheapest setting within 1e-4 (servotune's steps per period
+16, 32, ..., 1024; scipy the same rtol ladder). All timings, servotune's and scipy's, are the
+best of the same number of repeats (``--repeats``, default 10), each repeat computing all 20
+amplitudes.
 
 ``--convergence`` adds the convergence study behind the default steps per period: the error
 of N = Keq + j w Ceq against 65,536 steps for three parameter sets, 21 amplitudes (0.01 to 1000
@@ -56,6 +61,8 @@ from servotune.friction.equivalent import DESCRIBING_FUNCTION_STEPS  # noqa: E40
 __all__ = ["main"]
 
 TOLERANCE = 1e-4
+# scipy's rtol ladder, loosest first: 1e-1, 5e-2, 2e-2, 1e-2, ..., 2e-10, 1e-10
+RTOLS = [0.1] + [float(f"{m}e{e}") for e in range(-2, -11, -1) for m in (5, 2, 1)]
 
 
 def scipy_energy(p, amplitude, omega, method, rtol):
@@ -95,15 +102,13 @@ def scipy_energy(p, amplitude, omega, method, rtol):
     options = {"method": method, "rtol": rtol}
     y = [0.0, 0.0]
     for a, b in itertools.pairwise(knots):
-        extra = {"jac": jac1} if method == "Radau" else {}
-        y = solve_ivp(rhs1, (a, b), y, atol=[rtol * zs * 1e-2, rtol * 1e-2], **options,
-                      **extra).y[:, -1]
+        y = solve_ivp(rhs1, (a, b), y, atol=[rtol * zs * 1e-2, rtol * 1e-2], jac=jac1,
+                      **options).y[:, -1]
     y = [y[0] / -math.expm1(-y[1]), 0.0, 0.0]
     for a, b in itertools.pairwise(knots):
-        extra = {"jac": jac2} if method == "Radau" else {}
         y = solve_ivp(rhs2, (a, b), y, atol=[rtol * zs * 1e-2, rtol * 1e-2 * p.fs * amplitude,
                                              rtol * 1e-2 * p.fs * period],
-                      **options, **extra).y[:, -1]
+                      jac=jac2, **options).y[:, -1]
     return y[1], y[2] * omega / (math.pi * amplitude)
 
 
@@ -160,7 +165,8 @@ def convergence_study(steps=(128, 256, 512, 1024, 2048, 4096)):
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--repeats", type=int, default=3, help="timing repeats (best taken)")
+    parser.add_argument("--repeats", type=int, default=10,
+                        help="timing repeats of every method (best taken)")
     parser.add_argument("--convergence", action="store_true",
                         help="add the convergence study of the default steps per period")
     args = parser.parse_args(argv)
@@ -175,9 +181,9 @@ def main(argv=None) -> dict:
     err_default = float(np.max(np.abs(
         servotune_all(p, amplitudes, omega, n_default) / reference - 1.0)))
     target = max(err_default, 1e-9)
-    rtols = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
+    rtols = RTOLS
     t_default = best_time(lambda: servotune_all(p, amplitudes, omega, n_default),
-                          10 * args.repeats)[0]
+                          args.repeats)[0]
     methods = {}
     for method in ("LSODA", "Radau"):
         rtol, err = calibrate(lambda r, m=method: scipy_all(p, amplitudes, omega, m, r), rtols,
@@ -195,7 +201,7 @@ def main(argv=None) -> dict:
     n_loose, err_loose = calibrate(lambda n: servotune_all(p, amplitudes, omega, n),
                                    [16, 32, 64, 128, 256, 512, 1024], reference, loose)
     t_loose = best_time(lambda: servotune_all(p, amplitudes, omega, n_loose),
-                        10 * args.repeats)[0]
+                        args.repeats)[0]
     loose_methods = {}
     for method in ("LSODA", "Radau"):
         rtol, err = calibrate(lambda r, m=method: scipy_all(p, amplitudes, omega, m, r), rtols,
@@ -211,6 +217,8 @@ def main(argv=None) -> dict:
         "speedup": timed[baseline] / t_default,
         "reference": "solve_ivp Radau rtol 1e-11",
         "reference_time_s": t_reference,
+        "rtol_ladder": rtols,
+        "timing": f"best of {args.repeats} repeats for every method (all 20 amplitudes each)",
         "servotune_default_steps_per_period": n_default,
         "servotune_default_max_relative_error": err_default,
         "servotune_default_time_s": t_default,
