@@ -12,9 +12,14 @@ system servotune simulates.
   settings (step 2.5e-4 s, tolerance 1e-4). Its time is the wall time of the call, set-up
   included (the interconnection of the linear part, its modal form, the step weights) and
   reported apart.
-* baselines: ``scipy.integrate.solve_ivp`` with LSODA and with Radau given the analytic
-  Jacobian, on the same ODE (:mod:`servotune.simulate.reference`, works as extra states), set-up
-  (building that ODE) included.
+* baselines: ``scipy.integrate.solve_ivp`` with LSODA, Radau and BDF, each given the analytic
+  Jacobian, on the same ODE (:func:`servotune.simulate.reference.ode_model`, works as extra
+  states) with the sweep force written in closed form in its right-hand side: the ODE's inputs
+  function (which evaluates ``Scenario.signals(t)`` at every call: a dict, broadcasts, finite
+  checks) replaced by ``u[k] = (F_pp / 2) sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))`` and the
+  constant 1, the phase as :func:`servotune.simulate.sweep_phase` writes it (asserted equal to
+  ``scenario.signals(t)["f_wp_x"]`` to 1e-12 of the amplitude on 4001 times, and the
+  right-hand sides equal, before any timing). Set-up (building that ODE) included.
 
 Equal accuracy, decided on a 0.1 s segment around the resonance (45 -> 45.45 Hz at the sweep's
 rate), where LSODA at rtol 1e-10 is affordable as the reference: each scipy method runs at the
@@ -37,7 +42,7 @@ as the tuner's first start does.
 BLAS and OpenMP are held to one thread for every method (before numpy is imported): the
 matrices are small, and on a shared machine threaded BLAS mostly waits for its threads.
 
-Run: ``python benchmarks/simulate_sweep.py [--json] [--baselines LSODA,Radau] [--repeat N]
+Run: ``python benchmarks/simulate_sweep.py [--json] [--baselines LSODA,Radau,BDF] [--repeat N]
 [--duration S]`` (the scipy runs of the whole sweep take minutes; ``--duration`` shortens the
 sweep, at the same rate, for a quick check).
 """
@@ -52,6 +57,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import dataclasses  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -84,10 +90,75 @@ def _works_error(works, ref):
     return float(np.abs(works - ref).max() / np.abs(ref).max())
 
 
-def _scipy_run(axis, scenario, method, rtol):
-    """solve_ivp over the scenario, set-up (the ODE) included; (time, works, success, nfev)."""
-    t0 = time.perf_counter()
+def _inputs_cell(ode):
+    """The closure cell of the inputs function that ``ode.rhs``, ``ode.jac`` and ``ode.outputs``
+    call, and the names of the inputs in its order."""
+    rhs = ode.rhs
+    cell = dict(zip(rhs.__code__.co_freevars, rhs.__closure__, strict=True))["inputs"]
+    inputs = cell.cell_contents
+    sysm = dict(zip(inputs.__code__.co_freevars, inputs.__closure__, strict=True))["sysm"]
+    sysm = sysm.cell_contents
+    return cell, list(sysm.inputs)
+
+
+def _closed_form(ode, scenario):
+    """The ODE with the sweep force in closed form in its right-hand side (returned).
+
+    :func:`servotune.simulate.reference.ode_model` evaluates the inputs through the scenario's
+    signals (:meth:`servotune.simulate.Scenario.signals`: a dict, broadcasts and finite checks)
+    at every call; a user writing the right-hand side for this sweep writes the force itself.
+    The inputs function is replaced by ``u = u0.copy(); u[k] = (F_pp / 2) sin(phase(t))``, the
+    phase as :func:`servotune.simulate.sweep_phase` writes it. Standing still, the inputs are
+    the force and the constant 1 only.
+    """
+    cell, names = _inputs_cell(ode)
+    if not set(names) <= {"f_wp_x", "one"} or scenario.motion is not None:
+        raise RuntimeError(f"closed form written for the standing sweep force only: {names}")
+    f0, f1, _, duration, amplitude = scenario.sweep
+    k = names.index("f_wp_x")
+    u0 = np.array([1.0 if name == "one" else 0.0 for name in names])
+    two_pi, df, sin = 2.0 * math.pi, f1 - f0, math.sin
+
+    def inputs(t):
+        u = u0.copy()
+        u[k] = amplitude * sin(two_pi * (f0 * t + 0.5 * df * t * t / duration))
+        return u
+
+    cell.cell_contents = inputs
+    return ode
+
+
+def _check_closed_form(axis, scenario, n=4001):
+    """Assert that the closed-form force equals ``scenario.signals(t)["f_wp_x"]`` (and the
+    whole input vector the scenario's inputs) on n times to 1e-12 of the amplitude, and the
+    right-hand sides agree; returns the largest difference over the amplitude."""
     ode = ode_model(axis, scenario)
+    cell, names = _inputs_cell(ode)
+    original = cell.cell_contents
+    _closed_form(ode, scenario)
+    closed = cell.cell_contents
+    t = np.linspace(0.0, scenario.duration, n)
+    force = scenario.signals(t)["f_wp_x"]
+    u_closed = np.array([closed(float(ti)) for ti in t])
+    u_orig = np.array([original(float(ti)) for ti in t])
+    scale = float(np.abs(force).max())
+    err = float(np.abs(u_closed[:, names.index("f_wp_x")] - force).max() / scale)
+    assert err <= 1e-12, f"the closed-form force differs from the scenario's by {err:.2e}"
+    assert np.abs(u_closed - u_orig).max() <= 1e-12 * scale, "closed-form inputs differ"
+    y = np.linspace(-1e-6, 1e-6, ode.n)
+    for ti in t[:: max(1, n // 50)]:
+        cell.cell_contents = original
+        ref = ode.rhs(float(ti), y)
+        cell.cell_contents = closed
+        assert np.allclose(ode.rhs(float(ti), y), ref, rtol=1e-12, atol=1e-300)
+    return err
+
+
+def _scipy_run(axis, scenario, method, rtol):
+    """solve_ivp over the scenario, set-up (the ODE, the closed-form force) included;
+    (time, works, success, nfev)."""
+    t0 = time.perf_counter()
+    ode = _closed_form(ode_model(axis, scenario), scenario)
     sol = solve_ivp(ode.rhs, (0.0, scenario.duration), np.zeros(ode.n), method=method,
                     jac=ode.jac, rtol=rtol, atol=rtol * 1e-6, t_eval=[scenario.duration])
     return time.perf_counter() - t0, sol.y[-4:, -1], bool(sol.success), int(sol.nfev)
@@ -118,8 +189,8 @@ def main(argv=None) -> dict:
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--segment", type=float, default=0.1,
                         help="length [s] of the calibration segment (default 0.1)")
-    parser.add_argument("--baselines", default="LSODA,Radau",
-                        help="scipy methods, comma-separated (default LSODA,Radau)")
+    parser.add_argument("--baselines", default="LSODA,Radau,BDF",
+                        help="scipy methods, comma-separated (default LSODA,Radau,BDF)")
     parser.add_argument("--repeat", type=int, default=3,
                         help="repeats of servotune's full sweep (best taken)")
     parser.add_argument("--duration", type=float, default=DURATION,
@@ -140,6 +211,7 @@ def main(argv=None) -> dict:
 
     # calibration on the segment
     seg = sine_sweep(FORCE_PP, 45.0, 45.0 + RATE * args.segment, args.segment)
+    closed_form_error = max(_check_closed_form(axis, seg), _check_closed_form(axis, full))
     ode = ode_model(axis, seg)
     t0 = time.perf_counter()
     ref = solve_ivp(ode.rhs, (0, args.segment), np.zeros(ode.n), method="LSODA", jac=ode.jac,
@@ -190,7 +262,9 @@ def main(argv=None) -> dict:
         "axis": str(AXIS), "drive": "continuous (Axis.with_continuous_drive())",
         "force_pp_n": FORCE_PP,
         "sweep": f"10 -> {10.0 + RATE * duration:g} Hz in {duration:g} s",
-        "baseline": f"scipy solve_ivp, best of {', '.join(methods)} at equal accuracy",
+        "baseline": f"scipy solve_ivp, best of {', '.join(methods)} at equal accuracy, "
+                    "analytic Jacobian, the sweep force in closed form in the right-hand side",
+        "closed_form_force_max_relative_difference": closed_form_error,
         "speedup": best / wall,
         "speedup_integration_only": best / kernel,
         "speedups_by_method": {m: v["time_s"] / wall for m, v in finished.items()},
