@@ -916,6 +916,13 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
               progress=None, commission: bool = True) -> AxisTuning:
     """Tune an axis, verify it, and gather the before/after analyses.
 
+    A Craig-Bampton structure is tuned, checked and simulated without its fixed-interface
+    modes far above the band and the drive's sampling
+    (:func:`servotune.verdict.simulated_structure`: their static flexibility kept, the port
+    receptances within 1 % of the whole model's); the tuned design is then checked once on
+    the whole structure (stable in every regime model, the worst compliance peak within 1 %),
+    else it is not verified. The notes and the verdict say which structure was used.
+
     The tuning starts where a commissioning engineer ends
     (:func:`servotune.baseline.commissioning_design`): with a drive, friction and an
     operation, the current loop and the set-point filters of the commissioning design replace
@@ -976,6 +983,60 @@ def tune_axis(axis: Axis, free=None, chatter_weight: float | None = None,
     servotune.tuning.solve.tune : the optimisation this runs.
     servotune.tuning.verify.verify : the dense linear check of a design.
     """
+    from .verdict import simulated_structure
+
+    full = axis
+    truncation = simulated_structure(axis) if axis.friction is not None else None
+    if truncation is not None and truncation.truncated:
+        # the modes far above the band and the drive's sampling cost every check of the
+        # tuning O(n^3) and move nothing it judges: tuned without them, checked once with them
+        axis = dataclasses.replace(axis, structure=truncation.structure)
+    job = _tune_axis(axis, free, chatter_weight, starts, bounds, seed, tolerance, simulate,
+                     executor, c0, callback, progress, commission)
+    if truncation is None or not truncation.truncated:
+        return job
+    return _checked_on_whole_model(job, full, truncation)
+
+
+def _checked_on_whole_model(job: AxisTuning, full: Axis, truncation) -> AxisTuning:
+    """The tuned design checked once on the whole structure: stable in every regime model and
+    its worst compliance peak within the truncation's tolerance of the reduced one's, else not
+    verified; said in the notes and the verdict's checked lines."""
+    from .simulate.truncation import TRUNCATION_TOLERANCE
+    from .tuning.verify import verify
+
+    result = job.result
+    whole = dataclasses.replace(result.problem, structure=full.structure)
+    with _progress.task(f"checking the design on the whole model ({full.structure.n} DOFs)"):
+        perf = verify(whole, result.design)
+    reduced = result.after
+    dev = (abs(perf.peak_compliance / reduced.peak_compliance - 1.0)
+           if perf.stable and reduced.stable and reduced.peak_compliance > 0 else math.inf)
+    holds = bool(perf.stable and dev <= TRUNCATION_TOLERANCE)
+    line = (f"the structure: {truncation.describe()}, for the tuning, its linear checks and the "
+            f"simulations; the tuned design checked once on the whole model "
+            f"({truncation.total} fixed-interface modes): "
+            + (f"stable in every regime model, worst compliance peak {perf.peak_compliance:.4g} "
+               f"m/N ({100 * dev:.2g} % from the reduced model's)" if perf.stable else
+               "unstable in a regime model"))
+    notes = (*job.notes, line)
+    if holds:
+        verdict = (None if job.verdict is None else dataclasses.replace(
+            job.verdict, checked=(*job.verdict.checked, line)))
+        return dataclasses.replace(job, axis=full, notes=notes, verdict=verdict)
+    reason = ("on the whole model the design is unstable in a regime model" if not perf.stable
+              else f"on the whole model the worst compliance peak differs by {100 * dev:.2g} % "
+                   f"from the reduced model's (more than {100 * TRUNCATION_TOLERANCE:g} %)")
+    result = dataclasses.replace(result, success=False, reasons=(*result.reasons, reason))
+    verdict = (None if job.verdict is None else dataclasses.replace(
+        job.verdict, verified=False, linear_holds=False,
+        reasons=(*job.verdict.reasons, reason), checked=(*job.verdict.checked, line)))
+    return dataclasses.replace(job, axis=full, result=result, notes=notes, verdict=verdict)
+
+
+def _tune_axis(axis: Axis, free, chatter_weight, starts, bounds, seed, tolerance, simulate,
+               executor, c0, callback, progress, commission) -> AxisTuning:
+    """:func:`tune_axis` on the structure it tunes with."""
     settings = axis.tuning
     free = expand_free(settings.free if free is None else free)
     chatter_weight = settings.chatter_weight if chatter_weight is None else chatter_weight

@@ -727,7 +727,7 @@ def simulate_feeding(axis: NonlinearAxis, speed: float, tags: dict,
                       wall_time=time.perf_counter() - wall)
 
 
-def simulated_structure(axis, problem) -> Truncation:
+def simulated_structure(axis, problem=None) -> Truncation:
     """The structure the verdict simulates: the axis' own without the fixed-interface modes far
     above the band the verdict sweeps (up to 2.5 times the requirements band's top, at most
     2 kHz) and the drive's sampling
@@ -735,14 +735,15 @@ def simulated_structure(axis, problem) -> Truncation:
     from .plant import WP_DOFS
     from .simulate.truncation import simulation_structure
 
-    drive = problem.drive
+    source = axis if problem is None else problem
+    drive = source.drive
     ports = [d for d in WP_DOFS if d in axis.structure.dofs] + list(axis.pads)
     rate = 0.0
     if drive is not None:
         ports += [d for d in (drive.motor.rotor, drive.motor.stator, drive.encoder) if d]
         if not drive.digital.is_continuous:
             rate = 1.0 / drive.sampling.current_period
-    lo, hi = (b * HZ_PER_RAD_S for b in problem.requirements.band)
+    lo, hi = (b * HZ_PER_RAD_S for b in source.requirements.band)
     return simulation_structure(axis.structure, ports, min(2.5 * hi, 2000.0), rate,
                                 max(min(lo, 1.0), 0.1))
 

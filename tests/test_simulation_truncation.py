@@ -108,3 +108,38 @@ def test_a_sweep_on_the_truncated_model_peaks_as_on_the_full_one(reduced):
         peaks.append(result.sweep_envelope().peak)
     assert t.kept < t.total
     assert peaks[1] == pytest.approx(peaks[0], rel=2e-3)
+
+
+def test_tune_on_the_truncated_structure_is_checked_on_the_whole_model(tmp_path):
+    """The table axis' export with 100 fixed-interface modes (up to about 30 kHz): tuned on the
+    modes below the cut-off, its design checked on all 100 (the note), and that check equals
+    the design checked on the whole axis by check_design (the user's own route)."""
+    import json
+    import re
+    import shutil
+    from pathlib import Path
+
+    import servotune as st
+    from servotune.cli import main
+    from servotune.design import check_design
+    from servotune.tuning.problem import Design
+
+    src = Path(__file__).resolve().parents[1] / "examples" / "data" / "table_axis"
+    ax = tmp_path / "ax"
+    shutil.copytree(src, ax)
+    toml = ax / "axis.toml"
+    toml.write_text(re.sub(r"^f_max_hz = .*$", "n_modes = 100", toml.read_text(),
+                           flags=re.MULTILINE))
+    assert main(["tune", str(ax), "--json", "--no-simulation", "--no-plots", "--starts", "1",
+                 "--workers", "1", "--out", str(tmp_path / "out")]) in (0, 3)
+    out = json.loads((tmp_path / "out" / "tune_table_axis" / "results.json").read_text())
+    note = next(n for n in out["notes"] if n.startswith("the structure: "))
+    kept = int(re.search(r"(\d+) of 100 fixed-interface modes", note).group(1))
+    assert 0 < kept < 100
+    whole_peak = float(re.search(r"worst compliance peak ([0-9.e+-]+) m/N", note).group(1))
+    axis = st.load_axis(ax)
+    assert len([d for d in axis.structure.dofs if d.startswith("mode.")]) == 100
+    design = Design(**{k: v for k, v in out["design"].items()})
+    checked = check_design(axis, design)
+    assert whole_peak == pytest.approx(checked.after.peak_compliance, rel=1e-3)
+    assert out["peak_compliance_after"] == pytest.approx(whole_peak, rel=TRUNCATION_TOLERANCE)
