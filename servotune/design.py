@@ -1012,13 +1012,15 @@ def _checked_on_whole_model(job: AxisTuning, full: Axis, truncation) -> AxisTuni
     reduced = result.after
     dev = (abs(perf.peak_compliance / reduced.peak_compliance - 1.0)
            if perf.stable and reduced.stable and reduced.peak_compliance > 0 else math.inf)
-    holds = bool(perf.stable and dev <= TRUNCATION_TOLERANCE)
+    # (a design unstable on the reduced model has failed already: the line only reports)
+    holds = bool(not reduced.stable or (perf.stable and dev <= TRUNCATION_TOLERANCE))
     line = (f"the structure: {truncation.describe()}, for the tuning, its linear checks and the "
             f"simulations; the tuned design checked once on the whole model "
             f"({truncation.total} fixed-interface modes): "
             + (f"stable in every regime model, worst compliance peak {perf.peak_compliance:.4g} "
-               f"m/N ({100 * dev:.2g} % from the reduced model's)" if perf.stable else
-               "unstable in a regime model"))
+               f"m/N ({100 * dev:.2g} % from the reduced model's)"
+               if perf.stable and reduced.stable else
+               "stable in every regime model" if perf.stable else "unstable in a regime model"))
     notes = (*job.notes, line)
     if holds:
         verdict = (None if job.verdict is None else dataclasses.replace(

@@ -75,7 +75,13 @@ class Truncation:
         return self.kept < self.total
 
     def describe(self) -> str:
-        """One line for a report: what was simulated."""
+        """Return one line for a report: what was simulated.
+
+        Returns
+        -------
+        str
+            The modes kept, the cut-off and the receptance check, or "all N modes".
+        """
         if not self.truncated:
             return f"all {self.total} fixed-interface modes" if self.total else "the full model"
         return (f"{self.kept} of {self.total} fixed-interface modes (those below "
